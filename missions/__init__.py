@@ -1,0 +1,1 @@
+"""marsupial.missions: the YAML missions shipped with the package."""

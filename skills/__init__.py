@@ -1,0 +1,1 @@
+"""marsupial.skills: plug-in skills, one module per skill family."""

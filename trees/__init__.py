@@ -1,0 +1,1 @@
+"""marsupial.trees: the mission runtime (YAML -> py_trees, runner, recorder, replay)."""

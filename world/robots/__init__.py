@@ -1,0 +1,21 @@
+"""Robot kinds of the world, looked up by name (``world.add_robot("bebop2")``)."""
+
+from __future__ import annotations
+
+import importlib
+
+from ..errors import UnknownNameError
+
+# kind -> "module:Class" (modules import lazily: a run loads only what it uses)
+ROBOT_KINDS: dict[str, str] = {
+}
+
+
+def robot_class(kind: str) -> type:
+    """The Python class implementing robot ``kind``; the error lists the known kinds."""
+    try:
+        target = ROBOT_KINDS[kind]
+    except KeyError:
+        raise UnknownNameError("robot", kind, ROBOT_KINDS) from None
+    module, _, cls = target.partition(":")
+    return getattr(importlib.import_module(module, __name__), cls)

@@ -1,0 +1,148 @@
+"""What every robot of the world shares: its pybullet body, named links, pose and sensors.
+
+Skills never call pybullet: they read state and send commands through the
+methods of a robot class. Poses are in the ``world`` frame (metres,
+quaternions ``[x, y, z, w]``); velocities in the world frame (m/s, rad/s).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pybullet
+
+from ..assets import asset_path
+from ..errors import UnknownNameError
+
+if TYPE_CHECKING:
+    from ..sensors.base import Sensor
+    from ..world import World
+
+
+def pose_from_list(pose: Sequence[float], default_z: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Turn a mission pose into ``(position, quaternion)`` in the world frame.
+
+    Accepted: ``[x, y]``, ``[x, y, yaw]`` (ground robots, z = ``default_z``)
+    or ``[x, y, z, yaw]``; yaw in radians about world z.
+    """
+    values = [float(v) for v in pose]
+    if len(values) == 2:
+        x, y, z, yaw = values[0], values[1], default_z, 0.0
+    elif len(values) == 3:
+        x, y, z, yaw = values[0], values[1], default_z, values[2]
+    elif len(values) == 4:
+        x, y, z, yaw = values
+    else:
+        raise ValueError(f"a pose is [x, y], [x, y, yaw] or [x, y, z, yaw]; got {list(pose)}")
+    return np.array([x, y, z]), np.array([0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)])
+
+
+def yaw_of(quaternion: Sequence[float]) -> float:
+    """Heading (rad) about world z of an ``[x, y, z, w]`` quaternion."""
+    x, y, z, w = quaternion
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+class Robot:
+    """Base of every robot: owns one pybullet body (or more) and its sensors.
+
+    Subclasses load their URDF in ``__init__`` with :meth:`load_urdf`, add
+    sensors with :meth:`add_sensor`, drive themselves in ``pre_physics`` /
+    ``post_physics`` (called by the world every physics step) and implement
+    :meth:`safe_stop`.
+    """
+
+    #: registry name of the kind, e.g. ``"bebop2"``
+    kind: str = ""
+
+    def __init__(self, world: World, name: str):
+        self.world = world
+        self.name = name
+        self.cid = world.client_id
+        self.body_id: int = -1
+        self.links: dict[str, int] = {}
+        self.sensors: dict[str, Sensor] = {}
+
+    # ------------------------------------------------------------ building
+    def load_urdf(
+        self,
+        filename: str,
+        position: Sequence[float],
+        orientation: Sequence[float] = (0.0, 0.0, 0.0, 1.0),
+        fixed_base: bool = False,
+    ) -> int:
+        """Load ``world/assets/<filename>`` as this robot's body; fill :attr:`links`."""
+        body = pybullet.loadURDF(
+            str(asset_path(filename)),
+            basePosition=list(position),
+            baseOrientation=list(orientation),
+            useFixedBase=fixed_base,
+            flags=pybullet.URDF_USE_INERTIA_FROM_FILE | pybullet.URDF_USE_SELF_COLLISION_EXCLUDE_PARENT,
+            physicsClientId=self.cid,
+        )
+        self.body_id = body
+        base_name = pybullet.getBodyInfo(body, physicsClientId=self.cid)[0].decode()
+        self.links = {base_name: -1}
+        for j in range(pybullet.getNumJoints(body, physicsClientId=self.cid)):
+            info = pybullet.getJointInfo(body, j, physicsClientId=self.cid)
+            self.links[info[12].decode()] = j
+        return body
+
+    def add_sensor(self, sensor: Sensor) -> Sensor:
+        """Attach ``sensor`` under its name; returns it."""
+        self.sensors[sensor.name] = sensor
+        return sensor
+
+    # --------------------------------------------------------------- state
+    def link_index(self, link: str) -> int:
+        """pybullet index of the link called ``link`` (-1 for the base)."""
+        try:
+            return self.links[link]
+        except KeyError:
+            raise UnknownNameError(f"link of {self.kind}", link, self.links) from None
+
+    def pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """Base position (m) and orientation quaternion ``[x, y, z, w]`` in the world frame."""
+        p, q = pybullet.getBasePositionAndOrientation(self.body_id, physicsClientId=self.cid)
+        return np.array(p), np.array(q)
+
+    def velocity(self) -> tuple[np.ndarray, np.ndarray]:
+        """Base linear (m/s) and angular (rad/s) velocity in the world frame."""
+        v, w = pybullet.getBaseVelocity(self.body_id, physicsClientId=self.cid)
+        return np.array(v), np.array(w)
+
+    def link_pose(self, link: str | int) -> tuple[np.ndarray, np.ndarray]:
+        """World pose of a link frame (URDF link frame, not its inertial frame)."""
+        index = self.link_index(link) if isinstance(link, str) else link
+        if index == -1:
+            return self.pose()
+        state = pybullet.getLinkState(
+            self.body_id, index, computeForwardKinematics=True, physicsClientId=self.cid
+        )
+        return np.array(state[4]), np.array(state[5])
+
+    def sensor(self, name: str) -> Sensor:
+        """The sensor called ``name``; the error lists this robot's sensors."""
+        try:
+            return self.sensors[name]
+        except KeyError:
+            raise UnknownNameError(f"sensor of {self.name}", name, self.sensors) from None
+
+    def state(self) -> dict[str, Any]:
+        """JSON-ready summary for logs: pose (world frame) plus what subclasses add."""
+        p, q = self.pose()
+        return {"position": p.tolist(), "orientation": q.tolist()}
+
+    # ------------------------------------------------------------ stepping
+    def pre_physics(self, dt: float) -> None:
+        """Apply this step's forces/commands (called by the world before each physics step)."""
+
+    def post_physics(self, dt: float) -> None:
+        """Update internal state after each physics step (batteries, estimates)."""
+
+    def safe_stop(self) -> None:
+        """Leave the robot safe: hover in place, stop the wheels, hold the arm."""
+        raise NotImplementedError(f"{type(self).__name__} must say how it stops safely")

@@ -1,0 +1,108 @@
+"""Sampling shared by all sensors: a rate, seeded noise, dropouts and latency.
+
+A sensor samples lazily: :meth:`Sensor.read` measures only when a new
+sample is due at the sensor's rate (so a camera nobody reads never
+renders), applies its seeded dropout, and returns the newest sample that
+is older than the configured latency. All times are simulated seconds.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
+
+if TYPE_CHECKING:
+    from ..world import World
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class SensorConfig:
+    """How a sensor samples; every field can be set from the mission.
+
+    Attributes:
+        rate_hz: samples per simulated second.
+        noise_std: standard deviation of the additive Gaussian noise, in the
+            sensor's own unit (m for ranges, m/s² for accelerations, 0-255
+            intensity for images).
+        dropout: probability in [0, 1] that a due sample is lost.
+        latency_s: delay (s) before a sample becomes readable (e.g. relayed video).
+    """
+
+    rate_hz: float
+    noise_std: float = 0.0
+    dropout: float = 0.0
+    latency_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.rate_hz <= 0:
+            raise ValueError(f"rate_hz must be > 0, got {self.rate_hz}")
+        if not 0.0 <= self.dropout <= 1.0:
+            raise ValueError(f"dropout must be within [0, 1], got {self.dropout}")
+        if self.noise_std < 0 or self.latency_s < 0:
+            raise ValueError("noise_std and latency_s must be >= 0")
+
+    def with_overrides(self, overrides: dict[str, Any] | None) -> SensorConfig:
+        """A copy with the fields named in ``overrides`` replaced (unknown names are an error)."""
+        if not overrides:
+            return self
+        unknown = set(overrides) - set(self.__dataclass_fields__)
+        if unknown:
+            raise ValueError(
+                f"unknown sensor setting(s) {sorted(unknown)}; expected {sorted(self.__dataclass_fields__)}"
+            )
+        return SensorConfig(**{**self.__dict__, **overrides})
+
+
+@dataclass(frozen=True)
+class Reading(Generic[T]):
+    """One sample: the simulated time it was taken (s) and its data."""
+
+    stamp: float
+    data: T
+
+
+class Sensor(Generic[T]):
+    """Base of every sensor. Subclasses implement :meth:`measure` (noise-free or noisy).
+
+    ``self.rng`` is the sensor's own stream from the world seed; use it for
+    every random draw so runs stay reproducible.
+    """
+
+    def __init__(self, world: World, name: str, config: SensorConfig):
+        self.world = world
+        self.name = name
+        self.config = config
+        self.rng = world.rng_for(f"sensor/{name}")
+        self.enabled = True
+        self._period_steps = max(1, world.clock.steps_for(1.0 / config.rate_hz))
+        self._next_due_step = 0
+        self._pending: deque[Reading[T]] = deque()
+        self._latest: Reading[T] | None = None
+        self.samples_taken = 0
+        self.samples_dropped = 0
+
+    def measure(self) -> T:
+        """Take one measurement of the current world state (called when a sample is due)."""
+        raise NotImplementedError
+
+    def read(self) -> Reading[T] | None:
+        """The newest readable sample (may be held from an earlier step), or ``None`` if none yet.
+
+        Compare ``reading.stamp`` with ``world.now`` to know its age.
+        """
+        clock = self.world.clock
+        if self.enabled and clock.steps >= self._next_due_step:
+            # one sample per read at most: a sensor read late samples the state it sees now
+            self._next_due_step = clock.steps - clock.steps % self._period_steps + self._period_steps
+            if self.config.dropout > 0 and self.rng.random() < self.config.dropout:
+                self.samples_dropped += 1
+            else:
+                self.samples_taken += 1
+                self._pending.append(Reading(clock.now, self.measure()))
+        ready_before = clock.now - self.config.latency_s + 1e-9
+        while self._pending and self._pending[0].stamp <= ready_before:
+            self._latest = self._pending.popleft()
+        return self._latest
