@@ -1,31 +1,54 @@
 """Scenes: static geometry loaded by name from ``world/scenes/<name>.yaml``.
 
-A scene file lists a flat floor and labelled primitive objects (boxes,
-cylinders, spheres) with colours, in the world frame (metres, yaw in
-radians)::
+A scene file lists a flat floor, labelled primitive objects (boxes,
+cylinders, spheres), labelled zones and named ground paths, all in the
+world frame (metres, radians)::
 
-    name: open_field
+    name: open_field                # must match the file name
     description: flat, featureless field
-    size: [80, 80]                  # extent x, y (m) for maps and plots
+    size: [120, 120]                # extent x, y (m) for maps and plots
     floor: {rgb: [96, 118, 74], height: 0.0}
     objects:
       - {label: wall_n, shape: box, size: [30, 0.2, 2.5], position: [0, 10, 1.25],
          yaw: 0.0, rgb: [190, 190, 190], tags: [wall]}
       - {label: barrel, shape: cylinder, radius: 0.3, length: 0.9, position: [2, 3, 0.45]}
+      - {label: slab, size: [2, 1, 0.1], position: [4, 0, 0.4], rpy: [0.0, 0.3, 1.2]}
+    zones:
+      - {label: corridor, position: [0, 0, 1.4], size: [13, 2.4, 2.8], tags: [corridor]}
+    paths:
+      operator_path: [[-13, -7], [-5.5, 0], [7.5, 0]]
 
-Every object is a static pybullet body with collision and visual shapes;
-``label`` names it for contact queries and ``tags`` group it (walls,
-door frames, debris, targets …). The floor is collision-only in headless
-worlds — cameras draw it analytically (see ``sensors/camera.py``).
+Objects: ``shape`` is ``box`` (``size: [x, y, z]``), ``cylinder``
+(``radius``, ``length`` along its z axis) or ``sphere`` (``radius``);
+``position`` is the centre; the orientation is ``yaw`` about world z, or
+``rpy: [roll, pitch, yaw]`` (pybullet's convention, R = Rz(yaw)·Ry(pitch)·Rx(roll));
+``rgb`` is 0-255; ``tags`` group objects (wall, door_frame, debris,
+target …). Every object is a static pybullet body with collision and
+visual shapes; ``label`` names it for contact queries.
+
+Zones are labelled axis-aligned boxes (``position`` = centre, ``size``)
+with no body at all: regions that conditions and tests ask about
+(``scene.zones_at(p)`` — is the carrier in a corridor, near a door frame?)
+and the recorded geometry of features (an aperture's centre and size).
+
+Paths are named polylines of ``[x, y]`` ground points (m), e.g. the
+operator's guide path through a building.
+
+The floor is collision-only in headless worlds — cameras draw it
+analytically (see ``sensors/camera.py``); the GUI draws it.
+
+A malformed file raises :class:`WorldError` naming the file, the entry
+(``objects[3] 'door_2'``), the key and what was expected.
 """
 
 from __future__ import annotations
 
-import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
 import pybullet
 import yaml
 
@@ -37,6 +60,13 @@ if TYPE_CHECKING:
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
 FLOOR_HALF_EXTENT = 200.0  # m: the floor is a 400 m square slab
 FLOOR_THICKNESS = 0.1  # m
+
+SHAPES = ("box", "cylinder", "sphere")
+SCENE_KEYS = ("name", "description", "size", "floor", "objects", "zones", "paths")
+FLOOR_KEYS = ("rgb", "height")
+OBJECT_KEYS = ("label", "shape", "size", "radius", "length", "position", "yaw", "rpy", "rgb", "tags")
+ZONE_KEYS = ("label", "position", "size", "tags")
+_YAML_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml parses ~5x faster
 
 
 @dataclass(frozen=True)
@@ -51,27 +81,74 @@ class Floor:
 
 @dataclass(frozen=True)
 class SceneObject:
-    """One labelled static object of a scene."""
+    """One labelled static object of a scene.
+
+    ``position`` is its centre (m, world frame), ``orientation`` its
+    ``[x, y, z, w]`` quaternion, ``size`` its extent along its own axes (m:
+    a box's size, ``(2r, 2r, length)`` for a cylinder, ``(2r, 2r, 2r)`` for
+    a sphere), ``rgb`` its colour (0-255).
+    """
 
     label: str
     body_id: int
     shape: str
     position: tuple[float, float, float]
     tags: tuple[str, ...] = ()
+    orientation: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
+    size: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    rgb: tuple[int, int, int] = (160, 160, 160)
+
+
+@dataclass(frozen=True)
+class Zone:
+    """A labelled axis-aligned box of the world frame with no body (m).
+
+    ``lo``/``hi`` are its min/max corners; 2-D queries use x and y only.
+    """
+
+    label: str
+    lo: tuple[float, float, float]
+    hi: tuple[float, float, float]
+    tags: tuple[str, ...] = ()
+
+    @property
+    def center(self) -> np.ndarray:
+        """Centre of the box (m, world frame)."""
+        return (np.asarray(self.lo) + np.asarray(self.hi)) / 2.0
+
+    @property
+    def size(self) -> np.ndarray:
+        """Extent along x, y, z (m)."""
+        return np.asarray(self.hi) - np.asarray(self.lo)
+
+    def distance(self, point: Sequence[float]) -> float:
+        """Euclidean distance (m) from ``point`` (``[x, y]`` or ``[x, y, z]``) to the box; 0 inside."""
+        p = np.asarray(point, dtype=float)
+        n = len(p)
+        lo, hi = np.asarray(self.lo[:n]), np.asarray(self.hi[:n])
+        return float(np.linalg.norm(np.maximum(0.0, np.maximum(lo - p, p - hi))))
+
+    def contains(self, point: Sequence[float], margin: float = 0.0) -> bool:
+        """True if ``point`` is inside the box grown by ``margin`` metres (a distance, not per axis)."""
+        return self.distance(point) <= margin
 
 
 @dataclass
 class Scene:
-    """A loaded scene: its floor, objects by label, extent (m) and description."""
+    """A loaded scene: floor, objects and zones by label, paths by name, extent (m)."""
 
     name: str
     description: str = ""
     size: tuple[float, float] = (80.0, 80.0)
     floor: Floor | None = None
     objects: dict[str, SceneObject] = field(default_factory=dict)
+    zones: dict[str, Zone] = field(default_factory=dict)
+    paths: dict[str, np.ndarray] = field(default_factory=dict)
+    client_id: int = -1
 
+    # ------------------------------------------------------------ objects
     def tagged(self, tag: str) -> list[SceneObject]:
-        """Objects carrying ``tag`` (e.g. ``"wall"``, ``"door_frame"``)."""
+        """Objects carrying ``tag`` (e.g. ``"wall"``, ``"door_frame"``), in file order."""
         return [o for o in self.objects.values() if tag in o.tags]
 
     def object(self, label: str) -> SceneObject:
@@ -79,16 +156,70 @@ class Scene:
         try:
             return self.objects[label]
         except KeyError:
-            raise UnknownNameError(f"object of scene {self.name}", label, self.objects) from None
+            raise UnknownNameError(f"{self.name} object", label, self.objects) from None
+
+    def labels(self, tag: str | None = None) -> list[str]:
+        """Labels of the objects (those carrying ``tag`` if given), in file order."""
+        return [o.label for o in self.objects.values() if tag is None or tag in o.tags]
+
+    def tags(self) -> set[str]:
+        """Every tag used by an object or a zone of the scene."""
+        return {t for o in self.objects.values() for t in o.tags} | {t for z in self.zones.values() for t in z.tags}
 
     def label_of(self, body_id: int) -> str | None:
-        """Label of the scene object with pybullet id ``body_id`` (``None`` if not a scene object)."""
+        """Label of the scene object with pybullet id ``body_id`` (``"floor"``; ``None`` if not in the scene)."""
         for obj in self.objects.values():
             if obj.body_id == body_id:
                 return obj.label
         if self.floor is not None and body_id == self.floor.body_id:
             return "floor"
         return None
+
+    def aabb(self, tag: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """World-frame bounding box ``(lo, hi)`` (m) of the objects (carrying ``tag`` if given).
+
+        Raises :class:`WorldError` when no object matches.
+        """
+        boxes = [
+            pybullet.getAABB(o.body_id, physicsClientId=self.client_id)
+            for o in self.objects.values()
+            if tag is None or tag in o.tags
+        ]
+        if not boxes:
+            raise WorldError(f"scene {self.name} has no object{f' tagged {tag!r}' if tag else ''}")
+        lo = np.min([b[0] for b in boxes], axis=0)
+        hi = np.max([b[1] for b in boxes], axis=0)
+        return lo, hi
+
+    # -------------------------------------------------------------- zones
+    def zone(self, label: str) -> Zone:
+        """The zone labelled ``label``; the error lists the zones of the scene."""
+        try:
+            return self.zones[label]
+        except KeyError:
+            raise UnknownNameError(f"{self.name} zone", label, self.zones) from None
+
+    def zones_tagged(self, tag: str) -> list[Zone]:
+        """Zones carrying ``tag`` (e.g. ``"corridor"``, ``"aperture"``), in file order."""
+        return [z for z in self.zones.values() if tag in z.tags]
+
+    def zones_at(self, point: Sequence[float], margin: float = 0.0, tag: str | None = None) -> list[Zone]:
+        """Zones containing ``point`` (``[x, y]``: plan view, or ``[x, y, z]``), grown by ``margin`` m.
+
+        ``tag`` keeps only the zones carrying it, e.g.
+        ``scene.zones_at(p_carrier[:2], margin=1.5, tag="door_frame")``.
+        """
+        return [
+            z for z in self.zones.values() if (tag is None or tag in z.tags) and z.contains(point, margin)
+        ]
+
+    # -------------------------------------------------------------- paths
+    def path(self, name: str) -> np.ndarray:
+        """Waypoints ``(N, 2)`` (m, world x/y) of the path ``name``; the error lists the paths."""
+        try:
+            return self.paths[name].copy()
+        except KeyError:
+            raise UnknownNameError(f"{self.name} path", name, self.paths) from None
 
 
 def known_scenes() -> list[str]:
@@ -104,45 +235,151 @@ def scene_file(name: str) -> Path:
     return path
 
 
+def read_scene_spec(path: Path) -> dict[str, Any]:
+    """Parse a scene file into a mapping; :class:`WorldError` names the file if it is not one."""
+    try:
+        spec = yaml.load(path.read_text(), Loader=_YAML_LOADER)
+    except yaml.YAMLError as err:
+        raise WorldError(f"{path}: not valid YAML: {err}") from None
+    if spec is None:
+        spec = {}
+    if not isinstance(spec, dict):
+        raise WorldError(f"{path}: a scene file is a mapping with keys {', '.join(SCENE_KEYS)}; got {type(spec).__name__}")
+    return spec
+
+
 def load_scene(world: World, name: str | None) -> Scene:
-    """Build scene ``name`` in ``world`` (``None``: a grey floor only) and return it."""
+    """Build scene ``name`` in ``world`` (``None``: a grey floor only) and return it.
+
+    Raises :class:`UnknownNameError` for an unknown name and
+    :class:`WorldError` naming the file, the entry and the key for a malformed file.
+    """
     if name is None:
         spec: dict[str, Any] = {"name": "empty", "floor": {"rgb": [128, 128, 128]}}
-        path = None
+        where = "<empty scene>"
     else:
         path = scene_file(name)
-        spec = yaml.safe_load(path.read_text()) or {}
-    where = str(path) if path else "<empty scene>"
-    scene = Scene(
-        name=str(spec.get("name", name)),
-        description=str(spec.get("description", "")),
-        size=tuple(spec.get("size", (80.0, 80.0))),
-    )
-    gui = pybullet.getConnectionInfo(world.client_id)["connectionMethod"] == pybullet.GUI
+        spec = read_scene_spec(path)
+        where = str(path)
+    try:
+        return _build(world, spec, name or "empty")
+    except _SpecError as err:
+        raise WorldError(f"{where}: {err}") from None
+
+
+# --------------------------------------------------------------------------- building
+
+
+class _SpecError(Exception):
+    """A malformed entry; :func:`load_scene` prefixes the file name."""
+
+
+_REQUIRED = object()
+
+
+class _Fields:
+    """Typed reads of one YAML mapping; errors name the entry, the key and what was expected."""
+
+    def __init__(self, spec: Any, entry: str, allowed: Sequence[str]):
+        if not isinstance(spec, dict):
+            raise _SpecError(f"{entry}: expected a mapping with keys {', '.join(allowed)}; got {spec!r}")
+        unknown = sorted(set(map(str, spec)) - set(allowed))
+        if unknown:
+            raise _SpecError(f"{entry}: unknown key(s) {', '.join(unknown)}; allowed keys: {', '.join(allowed)}")
+        self.spec = spec
+        self.entry = entry
+
+    def _get(self, key: str, default: Any, expected: str) -> Any:
+        if key in self.spec:
+            return self.spec[key]
+        if default is _REQUIRED:
+            raise _SpecError(f"{self.entry}: missing key '{key}' ({expected})")
+        return default
+
+    def _fail(self, key: str, expected: str) -> _SpecError:
+        return _SpecError(f"{self.entry}: '{key}' must be {expected}; got {self.spec[key]!r}")
+
+    def text(self, key: str, default: Any = _REQUIRED) -> str:
+        value = self._get(key, default, "a string")
+        if not isinstance(value, (str, int)) or isinstance(value, bool):
+            raise self._fail(key, "a string")
+        return str(value)
+
+    def number(self, key: str, default: Any = _REQUIRED, expected: str = "a number", positive: bool = False) -> float:
+        value = self._get(key, default, expected)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or (positive and value <= 0):
+            raise self._fail(key, expected)
+        return float(value)
+
+    def vector(self, key: str, n: int, default: Any = _REQUIRED, expected: str = "", positive: bool = False) -> tuple[float, ...]:
+        expected = expected or f"a list of {n} numbers"
+        value = self._get(key, default, expected)
+        ok = isinstance(value, (list, tuple)) and len(value) == n and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and (not positive or v > 0) for v in value
+        )
+        if not ok:
+            raise self._fail(key, expected)
+        return tuple(float(v) for v in value)
+
+    def rgb(self, default: Any) -> tuple[int, ...]:
+        value = self._get("rgb", default, "")
+        ok = isinstance(value, (list, tuple)) and len(value) in (3, 4) and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v <= 255 for v in value
+        )
+        if not ok:
+            raise self._fail("rgb", "3 or 4 values in 0..255")
+        return tuple(int(v) for v in value)
+
+    def tags(self) -> tuple[str, ...]:
+        value = self._get("tags", [], "")
+        if not isinstance(value, (list, tuple)) or not all(isinstance(t, str) for t in value):
+            raise self._fail("tags", "a list of strings")
+        return tuple(value)
+
+
+def _build(world: World, spec: dict[str, Any], default_name: str) -> Scene:
+    top = _Fields(spec, "scene", SCENE_KEYS)
+    name = top.text("name", default_name)
+    if name != default_name:
+        raise _SpecError(f"'name' is {name!r} but the file is {default_name}.yaml; they must match")
+    size = top.vector("size", 2, (80.0, 80.0), "[x, y] extent in metres (> 0)", positive=True)
+    scene = Scene(name=name, description=top.text("description", ""), size=size, client_id=world.client_id)  # type: ignore[arg-type]
     if "floor" in spec:
-        scene.floor = _make_floor(world, spec["floor"], draw=gui)
-    for i, obj in enumerate(spec.get("objects", []) or []):
-        try:
-            made = _make_object(world, obj)
-        except (KeyError, TypeError, ValueError) as err:
-            raise WorldError(f"{where}: objects[{i}] ({obj.get('label', '?') if isinstance(obj, dict) else obj}): {err}") from None
+        gui = pybullet.getConnectionInfo(world.client_id)["connectionMethod"] == pybullet.GUI
+        scene.floor = _make_floor(world, _Fields(spec["floor"], "floor", FLOOR_KEYS), draw=gui)
+    for i, entry in enumerate(_entries(spec, "objects")):
+        made = _make_object(world, _Fields(entry, _entry_name("objects", i, entry), OBJECT_KEYS))
         if made.label in scene.objects:
-            raise WorldError(f"{where}: objects[{i}]: duplicate label '{made.label}'")
+            raise _SpecError(f"{_entry_name('objects', i, entry)}: duplicate label '{made.label}'")
         scene.objects[made.label] = made
+    for i, entry in enumerate(_entries(spec, "zones")):
+        zone = _make_zone(_Fields(entry, _entry_name("zones", i, entry), ZONE_KEYS))
+        if zone.label in scene.zones:
+            raise _SpecError(f"{_entry_name('zones', i, entry)}: duplicate label '{zone.label}'")
+        scene.zones[zone.label] = zone
+    scene.paths = _read_paths(spec.get("paths") or {})
     return scene
 
 
-def _rgba(rgb: Any) -> list[float]:
-    values = [float(c) for c in rgb]
-    if len(values) not in (3, 4) or not all(0 <= c <= 255 for c in values):
-        raise ValueError(f"rgb must be 3 or 4 values in 0..255, got {rgb}")
-    rgba = [c / 255.0 for c in values[:3]] + [values[3] / 255.0 if len(values) == 4 else 1.0]
-    return rgba
+def _entries(spec: dict[str, Any], key: str) -> list[Any]:
+    entries = spec.get(key) or []
+    if not isinstance(entries, list):
+        raise _SpecError(f"'{key}' must be a list of mappings; got {type(entries).__name__}")
+    return entries
 
 
-def _make_floor(world: World, spec: dict[str, Any], draw: bool) -> Floor:
-    height = float(spec.get("height", 0.0))
-    rgb = tuple(int(c) for c in spec.get("rgb", (128, 128, 128)))
+def _entry_name(section: str, index: int, entry: Any) -> str:
+    label = entry.get("label") if isinstance(entry, dict) else None
+    return f"{section}[{index}]" + (f" '{label}'" if label is not None else "")
+
+
+def _rgba(rgb: Sequence[int]) -> list[float]:
+    return [c / 255.0 for c in rgb[:3]] + [rgb[3] / 255.0 if len(rgb) == 4 else 1.0]
+
+
+def _make_floor(world: World, spec: _Fields, draw: bool) -> Floor:
+    height = spec.number("height", 0.0, "the floor's top height in metres")
+    rgb = spec.rgb((128, 128, 128))[:3]
     half = [FLOOR_HALF_EXTENT, FLOOR_HALF_EXTENT, FLOOR_THICKNESS / 2]
     cid = world.client_id
     collision = pybullet.createCollisionShape(pybullet.GEOM_BOX, halfExtents=half, physicsClientId=cid)
@@ -159,34 +396,57 @@ def _make_floor(world: World, spec: dict[str, Any], draw: bool) -> Floor:
     return Floor(height=height, rgb=rgb, body_id=body, analytic=not draw)  # type: ignore[arg-type]
 
 
-def _make_object(world: World, spec: dict[str, Any]) -> SceneObject:
+def _make_object(world: World, spec: _Fields) -> SceneObject:
     cid = world.client_id
-    label = str(spec["label"])
-    shape = str(spec.get("shape", "box"))
-    rgba = _rgba(spec.get("rgb", (160, 160, 160)))
+    label = spec.text("label")
+    shape = spec.text("shape", "box")
     if shape == "box":
-        half = [float(s) / 2 for s in spec["size"]]
-        if len(half) != 3:
-            raise ValueError(f"size must be [x, y, z] in metres, got {spec['size']}")
-        geometry: dict[str, Any] = {"shapeType": pybullet.GEOM_BOX, "halfExtents": half}
+        size = spec.vector("size", 3, expected="[x, y, z] in metres (> 0) for a box", positive=True)
+        geometry: dict[str, Any] = {"shapeType": pybullet.GEOM_BOX, "halfExtents": [s / 2 for s in size]}
         visual_geometry = dict(geometry)
     elif shape == "cylinder":
-        radius, length = float(spec["radius"]), float(spec["length"])
+        radius = spec.number("radius", expected="a radius in metres (> 0) for a cylinder", positive=True)
+        length = spec.number("length", expected="a length in metres (> 0) for a cylinder", positive=True)
+        size = (2 * radius, 2 * radius, length)
         geometry = {"shapeType": pybullet.GEOM_CYLINDER, "radius": radius, "height": length}
         visual_geometry = {"shapeType": pybullet.GEOM_CYLINDER, "radius": radius, "length": length}
     elif shape == "sphere":
-        geometry = {"shapeType": pybullet.GEOM_SPHERE, "radius": float(spec["radius"])}
+        radius = spec.number("radius", expected="a radius in metres (> 0) for a sphere", positive=True)
+        size = (2 * radius,) * 3
+        geometry = {"shapeType": pybullet.GEOM_SPHERE, "radius": radius}
         visual_geometry = dict(geometry)
     else:
-        raise ValueError(f"shape must be box, cylinder or sphere, got '{shape}'")
-    position = [float(v) for v in spec["position"]]
-    if len(position) != 3:
-        raise ValueError(f"position must be [x, y, z] in metres, got {spec['position']}")
-    yaw = float(spec.get("yaw", 0.0))
-    orientation = [0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)]
+        raise _SpecError(f"{spec.entry}: 'shape' must be one of {', '.join(SHAPES)}; got {shape!r}")
+    position = spec.vector("position", 3, expected="[x, y, z] of the centre in metres")
+    if "rpy" in spec.spec and "yaw" in spec.spec:
+        raise _SpecError(f"{spec.entry}: give either 'yaw' or 'rpy', not both")
+    rpy = spec.vector("rpy", 3, (0.0, 0.0, spec.number("yaw", 0.0, "an angle in radians")), "[roll, pitch, yaw] in radians")
+    orientation = tuple(pybullet.getQuaternionFromEuler(rpy))
+    rgb = spec.rgb((160, 160, 160))
+    tags = spec.tags()
     collision = pybullet.createCollisionShape(physicsClientId=cid, **geometry)
-    visual = pybullet.createVisualShape(rgbaColor=rgba, physicsClientId=cid, **visual_geometry)
+    visual = pybullet.createVisualShape(rgbaColor=_rgba(rgb), physicsClientId=cid, **visual_geometry)
     body = pybullet.createMultiBody(0.0, collision, visual, position, orientation, physicsClientId=cid)
-    tags = tuple(str(t) for t in spec.get("tags", ()))
-    return SceneObject(label, body, shape, tuple(position), tags)  # type: ignore[arg-type]
+    return SceneObject(label, body, shape, position, tags, orientation, size, rgb[:3])  # type: ignore[arg-type]
+
+
+def _make_zone(spec: _Fields) -> Zone:
+    label = spec.text("label")
+    center = np.array(spec.vector("position", 3, expected="[x, y, z] of the zone's centre in metres"))
+    half = np.array(spec.vector("size", 3, expected="[x, y, z] extent in metres (> 0)", positive=True)) / 2
+    return Zone(label, tuple((center - half).tolist()), tuple((center + half).tolist()), spec.tags())  # type: ignore[arg-type]
+
+
+def _read_paths(spec: Any) -> dict[str, np.ndarray]:
+    if not isinstance(spec, dict):
+        raise _SpecError(f"'paths' must map a path name to a list of [x, y] points; got {spec!r}")
+    paths = {}
+    for name, points in spec.items():
+        ok = isinstance(points, list) and len(points) >= 2 and all(
+            isinstance(p, (list, tuple)) and len(p) == 2 and all(isinstance(v, (int, float)) for v in p) for p in points
+        )
+        if not ok:
+            raise _SpecError(f"paths['{name}'] must be a list of at least 2 [x, y] points in metres; got {points!r}")
+        paths[str(name)] = np.array(points, dtype=float)
+    return paths
 
