@@ -125,9 +125,9 @@ class Robot:
         return np.array(state[4]), np.array(state[5])
 
     def sensor(self, name: str) -> Sensor:
-        """The sensor called ``name``; the error lists this robot's sensors."""
+        """The sensor called ``name`` (full ``"<robot>/<sensor>"`` or short name); the error lists this robot's sensors."""
         try:
-            return self.sensors[name]
+            return self.sensors[name] if name in self.sensors else self.sensors[f"{self.name}/{name}"]
         except KeyError:
             raise UnknownNameError(f"sensor of {self.name}", name, self.sensors) from None
 
