@@ -1,0 +1,151 @@
+"""YAML documents that remember where every key and list item was written.
+
+:func:`load_yaml` parses a document into plain dicts/lists/scalars and a map
+from key paths (tuples of keys and list indices) to 1-based (line, column), so
+that any later error — a validation error, an unknown skill found by the
+compiler — can name the exact place in the file.
+
+Scalars follow YAML 1.2 where YAML 1.1 surprises: only ``true``/``false`` are
+booleans (``yes``, ``no``, ``on``, ``off`` stay strings, so ``{operator: no}``
+means the command "no"), and ``1e3`` is a float.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from typing import Any
+
+import yaml
+
+from .errors import KeyPathLike, MissionError
+
+Position = tuple[int, int]
+
+_BOOL_TAG = "tag:yaml.org,2002:bool"
+_FLOAT_TAG = "tag:yaml.org,2002:float"
+
+
+class _Loader(yaml.SafeLoader):
+    """Safe loader with YAML 1.2 booleans and exponent floats without a dot (``1e3``)."""
+
+    yaml_implicit_resolvers = {
+        first: [(tag, regexp) for tag, regexp in resolvers if tag != _BOOL_TAG]
+        for first, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()
+    }
+
+
+_Loader.add_implicit_resolver(_BOOL_TAG, re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF"))
+_Loader.add_implicit_resolver(_FLOAT_TAG, re.compile(r"^[-+]?[0-9][0-9_]*[eE][-+]?[0-9]+$"), list("-+0123456789"))
+
+
+def _position(mark: yaml.Mark) -> Position:
+    return mark.line + 1, mark.column + 1
+
+
+@dataclass
+class SourceDoc:
+    """A parsed YAML document: ``data`` (plain Python values) and the position of every key path.
+
+    ``file`` is the name shown in errors (a path or ``<string>``); ``text`` the
+    original text; ``positions`` maps a key path to the 1-based (line, column)
+    where its key (or list item) starts.
+    """
+
+    file: str
+    text: str
+    data: Any
+    positions: dict[tuple, Position] = field(default_factory=dict)
+
+    def locate(self, key_path: KeyPathLike) -> Position:
+        """1-based (line, column) of ``key_path``, or of its nearest existing ancestor."""
+        path = tuple(key_path)
+        while path not in self.positions:
+            path = path[:-1]
+        return self.positions[path]
+
+    def where(self, key_path: KeyPathLike) -> str:
+        """``file:line:column`` of ``key_path`` (see :meth:`locate`)."""
+        line, column = self.locate(key_path)
+        return f"{self.file}:{line}:{column}"
+
+    def error(
+        self,
+        key_path: KeyPathLike,
+        message: str,
+        expected: str | None = None,
+        suggestion: str | None = None,
+        note: str | None = None,
+    ) -> MissionError:
+        """A :class:`MissionError` located at ``key_path`` of this document (returned, not raised)."""
+        line, column = self.locate(key_path)
+        return MissionError(message, self.file, line, column, tuple(key_path), expected, suggestion, note)
+
+
+def _parse_error(exc: yaml.YAMLError, file: str) -> MissionError:
+    mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+    problem = getattr(exc, "problem", None) or str(exc)
+    context = getattr(exc, "context", None)
+    message = f"malformed YAML: {problem}" + (f" ({context})" if context else "")
+    if "\t" in problem or "'\\t'" in problem:
+        message += "; indent with spaces, not tabs"
+    line, column = _position(mark) if mark is not None else (None, None)
+    return MissionError(message, file, line, column)
+
+
+def _build(loader: _Loader, node: yaml.Node, path: tuple, doc: SourceDoc) -> Any:
+    """Plain value of ``node``, recording positions under ``path``; duplicate keys are errors."""
+    if isinstance(node, yaml.MappingNode):
+        seen: dict[Any, yaml.Node] = {}
+        for key_node, _ in node.value:
+            if isinstance(key_node, yaml.ScalarNode):
+                key = loader.construct_object(key_node)
+                if key in seen and key != "<<":
+                    first_line = seen[key].start_mark.line + 1
+                    line, column = _position(key_node.start_mark)
+                    raise MissionError(
+                        f"duplicate key '{key}' (first defined on line {first_line})",
+                        doc.file, line, column, path + (key,), expected="each key once per mapping",
+                    )
+                seen[key] = key_node
+        loader.flatten_mapping(node)  # resolve YAML merge keys (<<: *anchor)
+        result: dict[Any, Any] = {}
+        for key_node, value_node in node.value:
+            key = loader.construct_object(key_node, deep=True)
+            if isinstance(key, (list, dict)):
+                line, column = _position(key_node.start_mark)
+                raise MissionError("a mapping key must be a scalar", doc.file, line, column, path, expected="a name")
+            doc.positions[path + (key,)] = _position(key_node.start_mark)
+            result[key] = _build(loader, value_node, path + (key,), doc)
+        return result
+    if isinstance(node, yaml.SequenceNode):
+        items = []
+        for index, item in enumerate(node.value):
+            doc.positions[path + (index,)] = _position(item.start_mark)
+            items.append(_build(loader, item, path + (index,), doc))
+        return items
+    return loader.construct_object(node, deep=True)
+
+
+def load_yaml(text: str, file: str = "<string>") -> SourceDoc:
+    """Parse one YAML document with positions; malformed YAML -> :class:`MissionError` at the parser's position."""
+    doc = SourceDoc(file=str(file), text=text, data=None, positions={(): (1, 1)})
+    loader = _Loader(text)
+    try:
+        root = loader.get_single_node()
+        if root is not None:
+            doc.positions[()] = _position(root.start_mark)
+            doc.data = _build(loader, root, (), doc)
+    except yaml.YAMLError as exc:
+        raise _parse_error(exc, doc.file) from None
+    finally:
+        loader.dispose()
+    return doc
+
+
+def parse_scalar(text: str) -> Any:
+    """A value written on a command line (``3.5``, ``true``, ``[1, 2]``, ``hello``) parsed as YAML."""
+    try:
+        return load_yaml(text, "<value>").data
+    except MissionError:
+        return text
