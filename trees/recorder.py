@@ -1,0 +1,853 @@
+"""The run recorder: one MCAP file per run, JSON messages with JSON Schemas, readable in Foxglove.
+
+Channels (see ``docs/logs.md`` for every field):
+
+===================  ================================  ==============================================
+topic                schema                            what
+===================  ================================  ==============================================
+``/events``          ``marsupial.Event``               run_start, state_change, preemption, operator,
+                                                       outcome, run_end, error
+``/metrics``         ``marsupial.Metric``              ``{name, value, labels}``
+``/log``             ``foxglove.Log``                  one text line per event, plus free text
+``/tf``              ``foxglove.FrameTransform``       ``world`` -> ``<robot>`` per robot
+``/<robot>/pose``    ``foxglove.PoseInFrame``          robot base pose in ``world``
+``/scene``           ``foxglove.SceneUpdate``          static scene geometry, once at start
+``/<camera>/image``  ``foxglove.CompressedImage``      opt-in camera frames (png/jpeg)
+``/tree``            ``nav2_msgs/msg/BehaviorTreeLog`` tree status changes (``event_log``), on change
+``/tree/xml``        ``std_msgs/msg/String``           the tree as BehaviorTree.CPP XML (``data``)
+===================  ================================  ==============================================
+
+The ``/tree`` pair follows what the community's Foxglove behaviour-tree panel
+reads (a ``data`` string of XML on one topic, ``nav2_msgs`` ``event_log``
+entries on another, both JSON-encoded here; the schema names are the ones
+its topic pickers list). Node uids in ``event_log`` are the ``_uid``
+attributes of the XML (:mod:`marsupial.trees.btxml`). A change is found by
+comparing every node's status with the previous snapshot, in uid order — the
+comparison py_trees' ``SnapshotVisitor`` makes, but over the whole tree, so
+nodes halted without being ticked (a preempted skill going IDLE) are seen,
+and on plain lists, about five times cheaper than its uuid-keyed dicts.
+
+Time: every ``t`` argument is SIMULATED seconds; it becomes the message's
+``log_time``/``publish_time`` in nanoseconds and must not decrease.
+The file's metadata record ``marsupial`` holds the mission text and name,
+seed, package version and command line; a second record ``outcome`` is
+written at close.
+
+The file is a complete MCAP (summary, indexes, CRCs) however the run ends:
+:meth:`Recorder.close`, an exception inside ``with Recorder(...)``, Ctrl-C
+or SIGTERM (after :meth:`Recorder.install_signal_handlers`), or an
+interpreter exit that skipped the close. Only a hard kill (SIGKILL) leaves
+a truncated file, which loses at most the chunk in progress (``chunk_size``).
+"""
+
+from __future__ import annotations
+
+import atexit
+import base64
+import json
+import math
+import re
+import shlex
+import signal
+import sys
+import threading
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from types import FrameType
+from typing import TYPE_CHECKING, Any
+
+import py_trees
+from mcap.writer import CompressionType, Writer
+
+import marsupial
+
+from .btxml import STATUS_NAMES, to_btcpp_xml, walk
+from .errors import suggest
+
+if TYPE_CHECKING:
+    from marsupial.world.world import World
+
+__all__ = [
+    "CHANNEL_SCHEMAS",
+    "EVENT_KINDS",
+    "LOG_LEVELS",
+    "SCHEMAS",
+    "Recorder",
+    "Terminated",
+    "describe_event",
+]
+
+# ---------------------------------------------------------------- schemas
+# JSON Schemas of the Foxglove well-known types we write (same names and
+# field names as Foxglove's published definitions, only the fields used here).
+
+
+def _time(description: str) -> dict[str, Any]:
+    return {
+        "type": "object",
+        "title": "time",
+        "description": description,
+        "properties": {
+            "sec": {"type": "integer", "minimum": 0},
+            "nsec": {"type": "integer", "minimum": 0, "maximum": 999_999_999},
+        },
+    }
+
+
+def _object(title: str, description: str, **properties: Any) -> dict[str, Any]:
+    return {"title": title, "description": description, "type": "object", "properties": properties}
+
+
+def _numbers(title: str, description: str, names: str, unit: str) -> dict[str, Any]:
+    return _object(title, description, **{n: {"type": "number", "description": f"{n} {unit}"} for n in names})
+
+
+def _vector3(description: str) -> dict[str, Any]:
+    return _numbers("foxglove.Vector3", description, "xyz", "coordinate length")
+
+
+def _quaternion(description: str) -> dict[str, Any]:
+    return _numbers("foxglove.Quaternion", description, "xyzw", "value")
+
+
+def _pose(description: str) -> dict[str, Any]:
+    return _object(
+        "foxglove.Pose",
+        description,
+        position=_vector3("Point denoting position in 3D space"),
+        orientation=_quaternion("Quaternion denoting orientation in 3D space"),
+    )
+
+
+def _color(description: str) -> dict[str, Any]:
+    return _numbers("foxglove.Color", description, "rgba", "value between 0 and 1")
+
+
+def _array(items: dict[str, Any], description: str) -> dict[str, Any]:
+    return {"type": "array", "items": items, "description": description}
+
+
+def _enum(title: str, description: str, names: Sequence[str]) -> dict[str, Any]:
+    return {"title": title, "description": description, "oneOf": [{"title": n, "const": i} for i, n in enumerate(names)]}
+
+
+def _primitive(title: str, what: str, **extra: Any) -> dict[str, Any]:
+    return _object(
+        title,
+        f"A primitive representing a {what}",
+        pose=_pose(f"Position of the center of the {what} and its orientation"),
+        size=_vector3(f"Size of the {what} along each axis"),
+        **extra,
+        color=_color(f"Color of the {what}"),
+    )
+
+
+_STRING = {"type": "string"}
+_LEVEL_NAMES = ("UNKNOWN", "DEBUG", "INFO", "WARNING", "ERROR", "FATAL")
+
+_BT_STATUS = {"type": "string", "enum": ["IDLE", "RUNNING", "SUCCESS", "FAILURE"]}
+
+#: schema name -> JSON Schema, for every schema the recorder writes
+SCHEMAS: dict[str, dict[str, Any]] = {
+    "foxglove.FrameTransform": _object(
+        "foxglove.FrameTransform",
+        "A transform between two named coordinate frames in 3D space",
+        timestamp=_time("Timestamp of transform"),
+        parent_frame_id={"type": "string", "description": "Name of the parent frame"},
+        child_frame_id={"type": "string", "description": "Name of the child frame"},
+        translation=_vector3("Translation component of the transform"),
+        rotation=_quaternion("Rotation component of the transform"),
+    ),
+    "foxglove.PoseInFrame": _object(
+        "foxglove.PoseInFrame",
+        "A timestamped pose for an object or reference frame in 3D space",
+        timestamp=_time("Timestamp of pose"),
+        frame_id={"type": "string", "description": "Frame of reference for pose position and orientation"},
+        pose=_pose("Pose in 3D space"),
+    ),
+    "foxglove.SceneUpdate": _object(
+        "foxglove.SceneUpdate",
+        "An update to the entities displayed in a 3D scene",
+        deletions=_array(
+            _object(
+                "foxglove.SceneEntityDeletion",
+                "Command to remove previously published entities",
+                timestamp=_time("Only matching entities earlier than this timestamp are deleted"),
+                type=_enum("foxglove.SceneEntityDeletionType", "Type of deletion", ("MATCHING_ID", "ALL")),
+                id={"type": "string", "description": "Identifier which must match if type is MATCHING_ID"},
+            ),
+            "Scene entities to delete",
+        ),
+        entities=_array(
+            _object(
+                "foxglove.SceneEntity",
+                "A visual element in a 3D scene",
+                timestamp=_time("Timestamp of the entity"),
+                frame_id={"type": "string", "description": "Frame of reference"},
+                id={"type": "string", "description": "Identifier of the entity"},
+                lifetime={
+                    "type": "object",
+                    "title": "duration",
+                    "description": "Time after which the entity is removed (zero: never)",
+                    "properties": {
+                        "sec": {"type": "integer"},
+                        "nsec": {"type": "integer", "minimum": 0, "maximum": 999_999_999},
+                    },
+                },
+                frame_locked={"type": "boolean", "description": "Whether the entity follows frame_id as it moves"},
+                metadata=_array(
+                    _object("foxglove.KeyValuePair", "A key with its associated value", key=_STRING, value=_STRING),
+                    "Additional metadata of the entity",
+                ),
+                cubes=_array(_primitive("foxglove.CubePrimitive", "cube"), "Cube primitives"),
+                spheres=_array(_primitive("foxglove.SpherePrimitive", "sphere"), "Sphere primitives"),
+                cylinders=_array(
+                    _primitive(
+                        "foxglove.CylinderPrimitive",
+                        "cylinder",
+                        bottom_scale={"type": "number", "description": "0-1, ratio of the bottom face diameter"},
+                        top_scale={"type": "number", "description": "0-1, ratio of the top face diameter"},
+                    ),
+                    "Cylinder primitives",
+                ),
+            ),
+            "Scene entities to add or replace",
+        ),
+    ),
+    "foxglove.CompressedImage": _object(
+        "foxglove.CompressedImage",
+        "A compressed image",
+        timestamp=_time("Timestamp of image"),
+        frame_id={"type": "string", "description": "Frame of reference for the image (optical frame)"},
+        data={"type": "string", "contentEncoding": "base64", "description": "Compressed image data"},
+        format={"type": "string", "description": "Image format: jpeg or png"},
+    ),
+    "foxglove.Log": _object(
+        "foxglove.Log",
+        "A log message",
+        timestamp=_time("Timestamp of log message"),
+        level=_enum("foxglove.LogLevel", "Log level", _LEVEL_NAMES),
+        message={"type": "string", "description": "Log message"},
+        name={"type": "string", "description": "Process or node name"},
+        file={"type": "string", "description": "Filename"},
+        line={"type": "integer", "minimum": 0, "description": "Line number in the file"},
+    ),
+    "marsupial.Event": {
+        "title": "marsupial.Event",
+        "description": "A run event: 'kind' plus the fields of that kind (docs/logs.md)",
+        "type": "object",
+        "properties": {"kind": {"type": "string", "enum": None}},  # filled below from EVENT_KINDS
+        "required": ["kind"],
+        "additionalProperties": True,
+    },
+    "marsupial.Metric": _object(
+        "marsupial.Metric",
+        "A named scalar measurement at a simulated time",
+        name={"type": "string", "description": "Metric name"},
+        value={"type": ["number", "null"], "description": "Value (SI units); null if not finite"},
+        labels={"type": "object", "additionalProperties": {"type": "string"}, "description": "Labels"},
+    ),
+    "nav2_msgs/msg/BehaviorTreeLog": _object(
+        "nav2_msgs/msg/BehaviorTreeLog",
+        "Behaviour-tree node status changes since the previous message",
+        timestamp=_time("Time of the snapshot"),
+        event_log=_array(
+            _object(
+                "nav2_msgs/msg/BehaviorTreeStatusChange",
+                "One node's status change",
+                timestamp=_time("Time of the change"),
+                node_name={"type": "string", "description": "Node name"},
+                uid={"type": "integer", "minimum": 1, "description": "Node uid: its _uid in /tree/xml"},
+                previous_status=_BT_STATUS,
+                current_status=_BT_STATUS,
+            ),
+            "Status changes in depth-first node order",
+        ),
+    ),
+    "std_msgs/msg/String": _object(
+        "std_msgs/msg/String",
+        "The behaviour tree as BehaviorTree.CPP v4 XML with _uid attributes",
+        data={"type": "string", "description": "XML text"},
+    ),
+}
+
+#: event kind -> fields every event of that kind must carry (more are allowed)
+EVENT_KINDS: dict[str, tuple[str, ...]] = {
+    "run_start": (),
+    "state_change": (),
+    "preemption": ("preempted", "by", "why", "robot"),
+    "operator": ("command", "source"),
+    "outcome": ("node", "skill", "robot", "status", "message"),
+    "run_end": ("outcome", "sim_time"),
+    "error": ("message",),
+}
+SCHEMAS["marsupial.Event"]["properties"]["kind"]["enum"] = list(EVENT_KINDS)
+
+#: fixed topic -> schema name (per-robot poses and camera images are added as they appear)
+CHANNEL_SCHEMAS: dict[str, str] = {
+    "/events": "marsupial.Event",
+    "/metrics": "marsupial.Metric",
+    "/log": "foxglove.Log",
+    "/tf": "foxglove.FrameTransform",
+    "/scene": "foxglove.SceneUpdate",
+    "/tree": "nav2_msgs/msg/BehaviorTreeLog",
+    "/tree/xml": "std_msgs/msg/String",
+}
+POSE_SCHEMA = "foxglove.PoseInFrame"  # /<robot>/pose
+IMAGE_SCHEMA = "foxglove.CompressedImage"  # /<camera>/image
+
+#: foxglove.Log level names (any case) -> enum value
+LOG_LEVELS: dict[str, int] = {name.lower(): value for value, name in enumerate(_LEVEL_NAMES)}
+_EVENT_LEVELS = {"error": LOG_LEVELS["error"], "preemption": LOG_LEVELS["warning"]}
+
+WORLD_FRAME = "world"
+SIGTERM_EXIT_CODE = 128 + signal.SIGTERM  # what a shell reports for a process ended by SIGTERM
+
+
+class Terminated(SystemExit):
+    """Raised in the main thread when SIGTERM arrives (after the recorder has been closed)."""
+
+    def __init__(self) -> None:
+        super().__init__(SIGTERM_EXIT_CODE)
+
+
+# ---------------------------------------------------------------- helpers
+def _ns(t: float) -> int:
+    """Simulated seconds -> integer nanoseconds."""
+    return int(round(t * 1e9))
+
+
+def _stamp(ns: int) -> dict[str, int]:
+    return {"sec": ns // 1_000_000_000, "nsec": ns % 1_000_000_000}
+
+
+def _xyz(v: Sequence[float]) -> dict[str, float]:
+    return {"x": float(v[0]), "y": float(v[1]), "z": float(v[2])}
+
+
+def _xyzw(q: Sequence[float]) -> dict[str, float]:
+    return {"x": float(q[0]), "y": float(q[1]), "z": float(q[2]), "w": float(q[3])}
+
+
+def _json_default(value: Any) -> Any:
+    if hasattr(value, "tolist"):  # numpy scalars and arrays
+        return value.tolist()
+    if isinstance(value, (set, frozenset)):
+        return sorted(value, key=str)
+    if isinstance(value, Path):
+        return str(value)
+    if hasattr(value, "model_dump"):  # pydantic models
+        return value.model_dump()
+    if isinstance(value, py_trees.common.Status):
+        return STATUS_NAMES[value]
+    raise TypeError(f"a value of type {type(value).__name__} cannot be logged as JSON")
+
+
+def _finite(value: Any) -> Any:
+    """``value`` with every non-finite float replaced by ``None`` (JSON has no NaN)."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    return value
+
+
+_to_json = json.JSONEncoder(separators=(",", ":"), default=_json_default, allow_nan=False).encode
+
+
+def _encode(payload: dict[str, Any]) -> bytes:
+    try:
+        text = _to_json(payload)
+    except ValueError:  # NaN / inf somewhere
+        text = _to_json(_finite(json.loads(json.dumps(payload, default=_json_default))))
+    return text.encode()
+
+
+_BARE = re.compile(r"[^\s\"'=]+")  # strings printed without quotes in event text
+
+
+def _field_text(value: Any) -> str:
+    """One field value as timeline text: bare words stay bare, other strings are quoted."""
+    if isinstance(value, str):
+        return value if _BARE.fullmatch(value) else json.dumps(value, ensure_ascii=False)
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return repr(value)
+    return json.dumps(value, separators=(",", ":"), default=_json_default, sort_keys=True)
+
+
+def describe_event(kind: str, fields: Mapping[str, Any]) -> str:
+    """One-line text of an event: ``kind`` then ``key=value`` (required fields first, then the rest)."""
+    required = EVENT_KINDS.get(kind, ())
+    keys = [k for k in required if k in fields] + [k for k in fields if k not in required]
+    return " ".join([kind] + [f"{k}={_field_text(fields[k])}" for k in keys])
+
+
+def _metadata_text(value: Any) -> str:
+    return value if isinstance(value, str) else json.dumps(value, default=_json_default)
+
+
+class _TreeTrack:
+    """The tree the recorder follows: which nodes, and their statuses at the last snapshot."""
+
+    def __init__(self, key: tuple[int, ...]):
+        self.key = key  # identity of every node, in uid order: a new key is a new structure
+        self.statuses = [py_trees.common.Status.INVALID] * len(key)
+
+
+# ---------------------------------------------------------------- recorder
+class Recorder:
+    """Writes one run to an MCAP file (JSON messages, JSON Schemas; times are SIM seconds).
+
+    Use it as a context manager so the file is finalised whatever happens::
+
+        with Recorder("run.mcap", {"mission": text, "mission_name": "landing", "seed": 7}) as rec:
+            rec.install_signal_handlers()
+            rec.log_scene(world)
+            rec.log_event(0.0, "run_start", mission="landing", seed=7)
+            ...
+            rec.log_event(t, "run_end", outcome="success", sim_time=t)
+        # closed here: outcome taken from run_end, or "error"/"interrupted"/"terminated"
+
+    Args:
+        path: the ``.mcap`` file to write (replaced if it exists).
+        metadata: run metadata (``mission`` text, ``mission_name``, ``seed``,
+            ``command_line`` …); ``version`` (package version) and
+            ``command_line`` (``sys.argv``) are filled in when absent. Values
+            that are not strings are stored as JSON text.
+        record_images: write :meth:`log_image` frames (off: calls return at once).
+        chunk_size: uncompressed bytes per zstd chunk; a chunk reaches the disk
+            when full, so this bounds what a hard kill can lose.
+
+    After :meth:`close`, further log calls are ignored (a run ended by a
+    signal may still unwind through code that logs).
+    """
+
+    def __init__(
+        self,
+        path: str | Path,
+        metadata: Mapping[str, Any] | None = None,
+        *,
+        record_images: bool = False,
+        chunk_size: int = 256 * 1024,
+    ):
+        self.path = Path(path)
+        self.record_images = bool(record_images)
+        self.t = 0.0  # sim time (s) of the latest message
+        self._last_ns = 0
+        self._schema_ids: dict[str, int] = {}
+        self._channel_ids: dict[str, int] = {}
+        self._tree: _TreeTrack | None = None
+        self._run_end: dict[str, Any] | None = None
+        self._closing = False
+        self._closed = False
+        self._busy = False
+        self._pending: int | None = None  # signal number received during a write
+        self._saved_handlers: dict[int, Any] = {}
+
+        info = {"version": marsupial.__version__, "command_line": shlex.join(sys.argv)}
+        info.update(metadata or {})
+        self._file = open(self.path, "wb")  # noqa: SIM115 - closed by close()
+        self._writer = Writer(
+            self._file,
+            chunk_size=int(chunk_size),
+            compression=CompressionType.ZSTD,
+            enable_data_crcs=True,
+        )
+        self._writer.start(profile="", library=f"marsupial {marsupial.__version__}")
+        self._writer.add_metadata("marsupial", {str(k): _metadata_text(v) for k, v in info.items()})
+        atexit.register(self._close_at_exit)
+
+    # ------------------------------------------------------------ lifecycle
+    def __enter__(self) -> Recorder:
+        return self
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: Any) -> None:
+        if exc_type is None:
+            self.close()
+        elif issubclass(exc_type, Terminated):
+            self.close("terminated")
+        elif issubclass(exc_type, KeyboardInterrupt):
+            self.close("interrupted")
+        elif issubclass(exc_type, SystemExit):
+            self.close("exited")
+        else:
+            if not self._closed:
+                self.log_event(self.t, "error", message=f"{exc_type.__name__}: {exc}")
+            self.close("error")
+
+    @property
+    def closed(self) -> bool:
+        """True once the file has been finalised."""
+        return self._closed
+
+    def close(self, outcome: str | None = None, **details: Any) -> None:
+        """Finalise the file: a ``run_end`` event (unless one was logged), the ``outcome`` metadata, the summary.
+
+        Args:
+            outcome: how the run ended (``success``, ``failure``, ``aborted`` …);
+                default: the ``run_end`` event's outcome, else ``"unknown"``.
+            details: more ``key=value`` pairs for the ``outcome`` metadata record.
+
+        Safe to call more than once; signals arriving meanwhile are held until it is done.
+        """
+        if self._closed or self._closing:
+            return
+        self._closing = True
+        try:
+            if outcome is None:
+                outcome = str(self._run_end["outcome"]) if self._run_end else "unknown"
+            if self._run_end is None:
+                self._write_event(self.t, "run_end", {"outcome": outcome, "sim_time": self.t})
+            record = {"outcome": outcome, "sim_time": self.t, **details}
+            self._writer.add_metadata("outcome", {str(k): _metadata_text(v) for k, v in record.items()})
+            self._writer.finish()
+        finally:
+            self._file.close()
+            self._closed = True
+            atexit.unregister(self._close_at_exit)
+            self._restore_signal_handlers()
+        if self._pending is not None:  # a signal came in during a normal close: act on it now
+            raise self._signal_exception(self._pending)
+
+    def _close_at_exit(self) -> None:
+        self.close("incomplete")
+
+    # ------------------------------------------------------------ signals
+    def install_signal_handlers(self) -> bool:
+        """Make SIGINT and SIGTERM close this file cleanly, then end the program.
+
+        SIGINT raises ``KeyboardInterrupt`` and SIGTERM :class:`Terminated`
+        (a ``SystemExit`` with code 143) after the file has been closed with
+        outcome ``interrupted``/``terminated``. A signal that arrives while a
+        message is being written waits until that write is complete; one that
+        arrives during the close waits until the close is done. The previous
+        handlers come back at close. Returns False (and does nothing) when
+        not called from the main thread, where Python cannot take signals.
+        """
+        if threading.current_thread() is not threading.main_thread():
+            return False
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            if signum not in self._saved_handlers:
+                self._saved_handlers[signum] = signal.signal(signum, self._on_signal)
+        return True
+
+    def _restore_signal_handlers(self) -> None:
+        if self._saved_handlers and threading.current_thread() is threading.main_thread():
+            for signum, handler in self._saved_handlers.items():
+                signal.signal(signum, handler)
+            self._saved_handlers.clear()
+
+    @staticmethod
+    def _signal_exception(signum: int) -> BaseException:
+        return Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+
+    @staticmethod
+    def _signal_outcome(signum: int) -> str:
+        return "terminated" if signum == signal.SIGTERM else "interrupted"
+
+    def _on_signal(self, signum: int, frame: FrameType | None) -> None:
+        if self._closing or self._busy:
+            if self._pending is None:
+                self._pending = signum
+            return
+        self.close(self._signal_outcome(signum))
+        raise self._signal_exception(signum)
+
+    def _after_write(self) -> None:
+        signum, self._pending = self._pending, None
+        self.close(self._signal_outcome(signum))  # type: ignore[arg-type]
+        raise self._signal_exception(signum)  # type: ignore[arg-type]
+
+    # ------------------------------------------------------------ writing
+    def _channel(self, topic: str, schema_name: str) -> int:
+        channel = self._channel_ids.get(topic)
+        if channel is None:
+            schema = self._schema_ids.get(schema_name)
+            if schema is None:
+                data = json.dumps(SCHEMAS[schema_name], separators=(",", ":")).encode()
+                schema = self._schema_ids[schema_name] = self._writer.register_schema(
+                    schema_name, "jsonschema", data
+                )
+            channel = self._channel_ids[topic] = self._writer.register_channel(topic, "json", schema)
+        return channel
+
+    def _write(self, topic: str, schema_name: str, ns: int, payload: dict[str, Any]) -> None:
+        """Append one message; ``ns`` must not be earlier than the previous message's."""
+        data = _encode(payload)
+        self._busy = True
+        try:
+            self._writer.add_message(self._channel(topic, schema_name), ns, data, ns)
+        finally:
+            self._busy = False
+        if self._pending is not None and not self._closing:
+            self._after_write()
+
+    def _time(self, t: float, what: str) -> int | None:
+        """``t`` in ns, checked to be >= 0 and not earlier than the last message; ``None`` once closed."""
+        if self._closed:
+            return None
+        ns = _ns(t)
+        if ns < 0:
+            raise ValueError(f"{what} at t={t!r} s: simulated time starts at 0")
+        if ns < self._last_ns:
+            raise ValueError(
+                f"{what} at t={t!r} s is earlier than the last logged message (t={self.t!r} s); "
+                "log in non-decreasing simulated time"
+            )
+        self._last_ns, self.t = ns, float(t)
+        return ns
+
+    def _write_event(self, t: float, kind: str, fields: dict[str, Any]) -> None:
+        ns = self._time(t, f"event {kind!r}")
+        if ns is None:
+            return
+        if kind == "run_end":
+            self._run_end = fields
+        self._write("/events", "marsupial.Event", ns, {"kind": kind, **fields})
+        self._write_log(ns, _EVENT_LEVELS.get(kind, LOG_LEVELS["info"]), describe_event(kind, fields), "events")
+
+    def _write_log(self, ns: int, level: int, message: str, name: str) -> None:
+        self._write(
+            "/log", "foxglove.Log", ns, {"timestamp": _stamp(ns), "level": level, "message": message, "name": name}
+        )
+
+    # ------------------------------------------------------------ public logging
+    def log_event(self, t: float, kind: str, **fields: Any) -> None:
+        """Record a run event on ``/events`` (and its text on ``/log``).
+
+        ``kind`` is one of :data:`EVENT_KINDS`; each kind requires its fields
+        (``preemption``: preempted, by, why, robot; ``operator``: command,
+        source; ``outcome``: node, skill, robot, status, message; ``run_end``:
+        outcome, sim_time; ``error``: message) and may carry more.
+        ``t`` is simulated seconds.
+        """
+        required = EVENT_KINDS.get(kind)
+        if required is None:
+            close = suggest(kind, EVENT_KINDS)
+            hint = f"; did you mean '{close}'?" if close else ""
+            raise ValueError(f"unknown event kind '{kind}'; expected one of {', '.join(EVENT_KINDS)}{hint}")
+        missing = [f for f in required if f not in fields]
+        if missing:
+            raise ValueError(f"event '{kind}' needs the field(s) {', '.join(missing)}; got {', '.join(fields) or 'none'}")
+        self._write_event(t, kind, fields)
+
+    def log_metric(self, t: float, name: str, value: float, **labels: Any) -> None:
+        """Record a scalar ``value`` (SI units) called ``name`` on ``/metrics``; labels become strings."""
+        ns = self._time(t, f"metric {name!r}")
+        if ns is not None:
+            payload = {"name": name, "value": float(value), "labels": {k: str(v) for k, v in labels.items()}}
+            self._write("/metrics", "marsupial.Metric", ns, payload)
+
+    def log_text(self, t: float, level: str | int, message: str, name: str = "marsupial") -> None:
+        """A free text line on ``/log`` (foxglove.Log); ``level`` is debug/info/warning/error/fatal or its number."""
+        if isinstance(level, str):
+            if level.lower() not in LOG_LEVELS:
+                raise ValueError(f"unknown log level '{level}'; expected one of {', '.join(LOG_LEVELS)}")
+            level = LOG_LEVELS[level.lower()]
+        elif not 0 <= int(level) < len(_LEVEL_NAMES):
+            raise ValueError(f"log level must be 0..{len(_LEVEL_NAMES) - 1}, got {level}")
+        ns = self._time(t, "log line")
+        if ns is not None:
+            self._write_log(ns, int(level), str(message), name)
+
+    def log_robot_poses(self, t: float, poses: Mapping[str, tuple[Sequence[float], Sequence[float]]]) -> None:
+        """Robot base poses in the world frame: ``{name: (position m, quaternion [x, y, z, w])}``.
+
+        Each robot gets a ``/tf`` transform ``world`` -> ``<name>`` and a
+        ``/<name>/pose`` PoseInFrame.
+        """
+        ns = self._time(t, "robot poses")
+        if ns is None:
+            return
+        stamp = _stamp(ns)
+        for name, (position, quaternion) in poses.items():
+            translation, rotation = _xyz(position), _xyzw(quaternion)
+            self._write(
+                "/tf",
+                "foxglove.FrameTransform",
+                ns,
+                {
+                    "timestamp": stamp,
+                    "parent_frame_id": WORLD_FRAME,
+                    "child_frame_id": name,
+                    "translation": translation,
+                    "rotation": rotation,
+                },
+            )
+            self._write(
+                f"/{name}/pose",
+                POSE_SCHEMA,
+                ns,
+                {
+                    "timestamp": stamp,
+                    "frame_id": WORLD_FRAME,
+                    "pose": {"position": translation, "orientation": rotation},
+                },
+            )
+
+    def log_tree(self, t: float, tree: py_trees.behaviour.Behaviour | py_trees.trees.BehaviourTree) -> bool:
+        """Snapshot the tree's statuses on ``/tree`` if any changed since the last call (call after each tick).
+
+        The first call, and any call after the tree's structure changed, also
+        writes the tree as BehaviorTree.CPP XML on ``/tree/xml``. Each ``/tree``
+        message lists the nodes whose status changed (``event_log``, in uid
+        order), statuses as IDLE/RUNNING/SUCCESS/FAILURE; halted and preempted
+        nodes show up as going to IDLE. Returns whether a snapshot was written.
+        """
+        if self._closed:
+            return False
+        nodes = walk(tree)
+        key = tuple(map(id, nodes))
+        track = self._tree
+        fresh = track is None or track.key != key
+        if fresh:
+            track = _TreeTrack(key)
+        assert track is not None
+        statuses = [node.status for node in nodes]
+        if not fresh and statuses == track.statuses:
+            return False
+        ns = self._time(t, "tree snapshot")
+        if ns is None:
+            return False
+        if fresh:
+            self._tree = track
+            self._write("/tree/xml", "std_msgs/msg/String", ns, {"data": to_btcpp_xml(nodes[0], with_uids=True)})
+        stamp = _stamp(ns)
+        changes = [
+            {
+                "timestamp": stamp,
+                "node_name": node.name,
+                "uid": uid,
+                "previous_status": STATUS_NAMES[before],
+                "current_status": STATUS_NAMES[now],
+            }
+            for uid, (node, before, now) in enumerate(zip(nodes, track.statuses, statuses), start=1)
+            if before is not now
+        ]
+        track.statuses = statuses
+        self._write("/tree", "nav2_msgs/msg/BehaviorTreeLog", ns, {"timestamp": stamp, "event_log": changes})
+        return True
+
+    def log_scene(self, world: World, t: float = 0.0) -> None:
+        """The world's static scene on ``/scene`` (one SceneUpdate): the floor and every scene object.
+
+        Object geometry (box size, cylinder radius/length, sphere radius),
+        colour and pose are read back from pybullet, so they are what the
+        physics simulates. Entity ids are the scene labels (``floor`` for the floor).
+        """
+        import pybullet
+
+        ns = self._time(t, "scene")
+        if ns is None:
+            return
+        stamp = _stamp(ns)
+        cid = world.client_id
+        scene = world.scene
+        entities = []
+        if scene.floor is not None:
+            thickness = 0.02  # m: a thin slab whose top is the floor surface
+            entities.append(
+                self._entity(
+                    stamp,
+                    "floor",
+                    ["floor"],
+                    cubes=[
+                        {
+                            "pose": {
+                                "position": _xyz((0.0, 0.0, scene.floor.height - thickness / 2)),
+                                "orientation": _xyzw((0.0, 0.0, 0.0, 1.0)),
+                            },
+                            "size": _xyz((scene.size[0], scene.size[1], thickness)),
+                            "color": dict(zip("rgba", [c / 255.0 for c in scene.floor.rgb] + [1.0])),
+                        }
+                    ],
+                )
+            )
+        for label, obj in scene.objects.items():
+            position, orientation = pybullet.getBasePositionAndOrientation(obj.body_id, physicsClientId=cid)
+            primitives: dict[str, list[dict[str, Any]]] = {"cubes": [], "spheres": [], "cylinders": []}
+            for shape in pybullet.getVisualShapeData(obj.body_id, physicsClientId=cid):
+                geometry, dims, local_p, local_q, rgba = shape[2], shape[3], shape[5], shape[6], shape[7]
+                p, q = pybullet.multiplyTransforms(position, orientation, local_p, local_q, physicsClientId=cid)
+                if geometry == pybullet.GEOM_BOX:
+                    kind, size = "cubes", dims[:3]
+                elif geometry == pybullet.GEOM_SPHERE:
+                    kind, size = "spheres", (2 * dims[0],) * 3
+                elif geometry == pybullet.GEOM_CYLINDER:
+                    kind, size = "cylinders", (2 * dims[1], 2 * dims[1], dims[0])
+                else:
+                    continue  # meshes/planes are not part of YAML scenes
+                primitive = {"pose": {"position": _xyz(p), "orientation": _xyzw(q)}, "size": _xyz(size)}
+                if kind == "cylinders":
+                    primitive.update(bottom_scale=1.0, top_scale=1.0)
+                primitive["color"] = dict(zip("rgba", map(float, rgba)))
+                primitives[kind].append(primitive)
+            entities.append(self._entity(stamp, label, list(obj.tags), **primitives))
+        self._write("/scene", "foxglove.SceneUpdate", ns, {"deletions": [], "entities": entities})
+
+    @staticmethod
+    def _entity(stamp: dict[str, int], label: str, tags: list[str], **primitives: Any) -> dict[str, Any]:
+        return {
+            "timestamp": stamp,
+            "frame_id": WORLD_FRAME,
+            "id": label,
+            "lifetime": {"sec": 0, "nsec": 0},
+            "frame_locked": False,
+            "metadata": [{"key": "tags", "value": ",".join(tags)}],
+            "cubes": [],
+            "spheres": [],
+            "cylinders": [],
+            **primitives,
+        }
+
+    def log_image(
+        self,
+        t: float,
+        camera: str,
+        rgb: Any,
+        format: str = "jpeg",
+        frame_id: str | None = None,
+        stamp: float | None = None,
+        jpeg_quality: int = 90,
+    ) -> bool:
+        """An RGB frame (H x W x 3 uint8, or H x W grey) on ``/<camera>/image`` if images are recorded.
+
+        Args:
+            t: simulated time of the write (s).
+            camera: sensor name, e.g. ``"uav/camera"`` -> topic ``/uav/camera/image``.
+            rgb: the image, RGB channel order.
+            format: ``"jpeg"`` or ``"png"``.
+            frame_id: optical frame name (default: ``camera``).
+            stamp: time the frame was taken (s; default ``t``), the message's ``timestamp``.
+            jpeg_quality: 0..100 for jpeg.
+
+        Returns whether the frame was written (False when ``record_images`` is off).
+        """
+        if not self.record_images or self._closed:
+            return False
+        import cv2
+        import numpy as np
+
+        if format not in ("jpeg", "png"):
+            raise ValueError(f"image format must be 'jpeg' or 'png', got {format!r}")
+        image = np.asarray(rgb)
+        if image.dtype != np.uint8 or not (image.ndim == 2 or (image.ndim == 3 and image.shape[2] == 3)):
+            raise ValueError(f"expected an H x W x 3 (RGB) or H x W uint8 image, got {image.dtype} {image.shape}")
+        bgr = image[..., ::-1] if image.ndim == 3 else image
+        params = [cv2.IMWRITE_JPEG_QUALITY, int(jpeg_quality)] if format == "jpeg" else []
+        ok, encoded = cv2.imencode(".jpg" if format == "jpeg" else ".png", np.ascontiguousarray(bgr), params)
+        if not ok:
+            raise ValueError(f"OpenCV could not encode a {image.shape} image as {format}")
+        ns = self._time(t, f"image of {camera}")
+        if ns is None:
+            return False
+        payload = {
+            "timestamp": _stamp(_ns(t if stamp is None else stamp)),
+            "frame_id": frame_id or camera,
+            "data": base64.b64encode(encoded.tobytes()).decode("ascii"),
+            "format": format,
+        }
+        self._write(f"/{camera.strip('/')}/image", IMAGE_SCHEMA, ns, payload)
+        return True
