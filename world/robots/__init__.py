@@ -8,6 +8,14 @@ from ..errors import UnknownNameError
 
 # kind -> "module:Class" (modules import lazily: a run loads only what it uses)
 ROBOT_KINDS: dict[str, str] = {
+    "bebop2": ".quadrotor:Bebop2",
+    "ardrone2": ".quadrotor:ArDrone2",
+    "tello": ".quadrotor:Tello",
+    "summit_xl": ".summit_xl:SummitXL",
+    "mobile_manipulator": ".mobile_manipulator:MobileManipulator",
+    "child_ugv": ".ugv_docking:ChildUGV",
+    "mother_ugv": ".ugv_docking:MotherUGV",
+    "mms": ".mms:MMS",
 }
 
 

@@ -36,7 +36,7 @@ class ArmController:
 
     Args:
         max_speed: joint speed limit (rad/s); 15 rpm by default.
-        max_torque: motor torque limit (N·m) per joint.
+        max_torque: motor torque limit (N·m): one value for every joint, or one per joint.
         limits: ``(lower, upper)`` per joint (rad); targets are clipped into them.
     """
 
@@ -47,7 +47,7 @@ class ArmController:
         joint_indices: Sequence[int],
         limits: Sequence[tuple[float, float]],
         max_speed: float = 15.0 * RPM,
-        max_torque: float = 60.0,
+        max_torque: float | Sequence[float] = 60.0,
         gains: JointPID = JointPID(),
     ):
         self.cid = world.client_id
@@ -61,7 +61,7 @@ class ArmController:
         self.targets = self.positions()
         self._integral = np.zeros(len(self.joints))
         self._previous_error = np.zeros(len(self.joints))
-        self._forces = [max_torque] * len(self.joints)
+        self._forces = np.broadcast_to(np.asarray(max_torque, dtype=float), (len(self.joints),)).tolist()
 
     def positions(self) -> np.ndarray:
         """Joint angles now (rad)."""
@@ -94,18 +94,36 @@ class ArmController:
         self._previous_error[:] = 0.0
 
     def pre_physics(self, dt: float) -> None:
-        """One PID step: position error -> clipped joint velocity command."""
-        error = self.targets - self.positions()
-        self._integral = np.clip(self._integral + error * dt, -0.2, 0.2)
-        derivative = (error - self._previous_error) / dt
-        self._previous_error = error
+        """One PID step: position error -> clipped joint velocity command.
+
+        The integral accumulates only while a joint's command is below the
+        speed limit (conditional anti-windup), so a long slew at the limit
+        does not wind it up into an overshoot. Plain floats: this runs every
+        physics step.
+        """
         g = self.gains
-        speed = np.clip(g.kp * error + g.ki * self._integral + g.kd * derivative, -self.max_speed, self.max_speed)
+        vmax = self.max_speed
+        states = pybullet.getJointStates(self.body_id, self.joints, physicsClientId=self.cid)
+        targets = self.targets.tolist()
+        integral = self._integral.tolist()
+        previous = self._previous_error.tolist()
+        speeds = []
+        for i, state in enumerate(states):
+            error = targets[i] - state[0]
+            derivative = (error - previous[i]) / dt
+            previous[i] = error
+            command = g.kp * error + g.ki * integral[i] + g.kd * derivative
+            if -vmax < command < vmax:
+                integral[i] = min(0.2, max(-0.2, integral[i] + error * dt))
+                command = g.kp * error + g.ki * integral[i] + g.kd * derivative
+            speeds.append(min(vmax, max(-vmax, command)))
+        self._integral[:] = integral
+        self._previous_error[:] = previous
         pybullet.setJointMotorControlArray(
             self.body_id,
             self.joints,
             pybullet.VELOCITY_CONTROL,
-            targetVelocities=speed.tolist(),
+            targetVelocities=speeds,
             forces=self._forces,
             physicsClientId=self.cid,
         )

@@ -12,9 +12,11 @@ stopped it) the reference restarts from the actual pose, so a blocked base
 stays blocked instead of winding up. Commands
 are in the base frame (v forward in m/s, omega counter-clockwise in rad/s),
 limited in magnitude and rate. Wheel slip follows a simple skid model:
-the achieved speed is ``(1 - slip) * v`` and turning adds a lateral drift
-``drift_per_rad * v * omega`` (m/s, positive to the left) plus seeded noise,
-which is what Palafox et al. observed of the Summit XL on circular tracks.
+the achieved speed is ``(1 - slip) * v``, the achieved yaw rate
+``(1 - turn_slip) * omega`` (skid-steer wheels scrub while turning, so a
+commanded circle comes out wider: Palafox et al. saw the Summit XL drive a
+12 m circle for a 10 m command), and turning adds a lateral drift
+``drift_per_rad * v * omega`` (m/s, positive to the left) plus seeded noise.
 """
 
 from __future__ import annotations
@@ -45,6 +47,7 @@ class DiffDriveLimits:
         noise_std: standard deviation of the seeded speed noise (m/s, and rad/s on omega).
         max_force: force (N) the drive constraint may exert; walls stronger than it stop the base.
         resync_m: distance (m) between body and reference beyond which the reference resyncs.
+        turn_slip: fraction of the commanded yaw rate lost to wheel scrub (0 = none).
     """
 
     max_speed: float
@@ -56,6 +59,7 @@ class DiffDriveLimits:
     noise_std: float = 0.0
     max_force: float = 5000.0
     resync_m: float = 0.05
+    turn_slip: float = 0.0
 
 
 def _yaw(q: tuple[float, ...]) -> float:
@@ -119,7 +123,7 @@ class DiffDrive:
         lim = self.limits
         self.v = _approach(self.v, self.v_cmd, lim.max_accel * dt)
         self.omega = _approach(self.omega, self.omega_cmd, lim.max_alpha * dt)
-        v, omega = self.v * (1.0 - lim.slip), self.omega
+        v, omega = self.v * (1.0 - lim.slip), self.omega * (1.0 - lim.turn_slip)
         lateral = lim.drift_per_rad * self.v * self.omega
         if lim.noise_std > 0 and (self.v != 0.0 or self.omega != 0.0):
             v += self.rng.normal(0.0, lim.noise_std)

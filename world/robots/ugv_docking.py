@@ -1,0 +1,291 @@
+"""The UGV–UGV marsupial pair of Zhao et al.: a child UGV with an up-tilted camera, a mother with a lifting station.
+
+From "A coordinated docking approach based on embedded vision" (Zhao, Cao,
+Gu, Zhou, Xu, Tan). Numbers from its Table 1: entrance width b_e = 19 cm,
+child width b_c = 17 cm, camera tilted up by θ = 15°, the benchmark's
+horizontal colour border H_GS is h = 23 cm above the camera, 640×480
+images, field of view θ_f = 61°.
+
+Geometry choices the paper leaves open, and why:
+
+* θ_f = 61° is taken as the *vertical* field of view. With θ = 15° and
+  h = 23 cm, H_GS leaves the top of the image at a horizontal distance
+  h / tan(θ + θ_f/2) = 0.226 m, which is the paper's visual perception
+  criterion distance d_e = 22 cm (Table 1): the two agree only this way.
+* The benchmark (§2, §3.1, Fig. 1): four equal rectangular blocks in a
+  2×2 checkerboard hanging on the lifting platform above the entrance.
+  The midpoint search (§3.1) expects red at (i, j), green at (i, j+8),
+  red at (i+8, j+8) and green at (i+8, j), and the lateral search red above
+  and green below H_GS on the left: red top-left and bottom-right, green
+  top-right and bottom-left, as the approaching child sees it. Its width
+  follows from s_u^e = 203 px at d_e (Table 1): 203 px × 0.272 m depth /
+  407 px focal length = 0.136 m, so each block is 6.8 cm wide; blocks are
+  5 cm tall (not given) so that the 8-px checks hold up to ≈2.5 m, the
+  farthest start of the repeatability trials (§4.2).
+* The child's camera is 0.10 m above the floor, so H_GS is 0.33 m up.
+* The lifting platform raises the child by 0.30 m into the storage capsule
+  at 0.05 m/s (not given).
+
+Carrying: the child is driven by a :class:`DiffDrive` constraint that holds
+its height. When :meth:`MotherUGV.raise_platform` is called with a child on
+the platform (:meth:`MotherUGV.child_on_platform`), the mother suspends the
+child's drive and welds the child to the platform with a fixed constraint
+at their relative pose of that moment; the child rides up, is carried
+while the mother drives, and is released (drive resumed from where it
+stands) once :meth:`MotherUGV.lower_platform` has brought the platform back
+down to the floor.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pybullet
+
+from ..sensors.base import SensorConfig
+from ..sensors.camera import OPTICAL_FORWARD, Camera, Intrinsics
+from .attachment import weld
+from .base import yaw_of
+from .diff_drive import DiffDriveLimits
+from .wheeled import WheeledRobot
+
+if TYPE_CHECKING:
+    from ..world import World
+
+ENTRANCE_WIDTH_M = 0.19  # b_e, Table 1 (the slot of mother_ugv.urdf)
+CAMERA_RESOLUTION = (640, 480)  # W × H, Table 1
+CAMERA_FOV_V_DEG = 61.0  # θ_f, Table 1 (vertical, see module docstring)
+CAMERA_CONFIG = SensorConfig(rate_hz=10.0)  # embedded CMOS camera; rate not given
+LIFT_TRAVEL_M = 0.30  # platform travel from the floor to the storage capsule (not given)
+LIFT_SPEED_MPS = 0.05  # m/s (not given)
+LIFT_FORCE_N = 300.0  # lift motor force limit (N)
+LOWERED_TOLERANCE_M = 0.002  # the platform counts as lowered within this height (m)
+CARRY_FORCE_N = 1000.0  # strength of the weld holding a carried child on the platform (N)
+
+CHILD_LIMITS = DiffDriveLimits(max_speed=0.3, max_omega=1.5, max_accel=0.5, max_alpha=3.0)
+"""Small indoor/outdoor differential child robot (the paper gives no speeds)."""
+MOTHER_LIMITS = DiffDriveLimits(max_speed=0.5, max_omega=0.5, max_accel=0.5, max_alpha=1.0)
+"""The mother turns slowly on the spot while the child docks (§3.3); no speeds given."""
+
+
+class ChildUGV(WheeledRobot):
+    """Child UGV, 17 cm wide, with a forward CMOS camera tilted up by 15°.
+
+    Sensors: ``camera`` (:class:`Camera` on ``camera_link``, 640×480, 61°
+    vertical field of view, 10 Hz by default).
+
+    Args:
+        pose: footprint pose ``[x, y]``, ``[x, y, yaw]`` or ``[x, y, z, yaw]`` (world frame, m, rad).
+        limits: drive limits replacing :data:`CHILD_LIMITS`, whole or by field.
+        camera_resolution: ``(width, height)`` in pixels; a smaller image keeps the
+            61° field of view (the paper's pixel thresholds assume 640×480).
+        camera: :class:`SensorConfig` overrides of the camera (``rate_hz``, ``noise_std``, …).
+
+    Attributes:
+        size: ``(length, width)`` of the footprint (m), from the URDF.
+        carrier: the :class:`MotherUGV` carrying this child on its platform, or ``None``.
+    """
+
+    kind = "child_ugv"
+    urdf = "child_ugv.urdf"
+    default_limits = CHILD_LIMITS
+
+    def __init__(
+        self,
+        world: World,
+        name: str,
+        pose: Sequence[float] = (0.0, 0.0, 0.0),
+        limits: DiffDriveLimits | Mapping[str, float] | None = None,
+        camera_resolution: Sequence[int] = CAMERA_RESOLUTION,
+        camera: Mapping[str, Any] | None = None,
+    ):
+        super().__init__(world, name, pose=pose, limits=limits)
+        (shape,) = pybullet.getCollisionShapeData(self.body_id, -1, physicsClientId=self.cid)
+        self.size: tuple[float, float] = (float(shape[3][0]), float(shape[3][1]))
+        self.carrier: MotherUGV | None = None
+        width, height = (int(n) for n in camera_resolution)
+        self.camera = self.add_sensor(
+            Camera(
+                self,
+                "camera",
+                Intrinsics(width, height, CAMERA_FOV_V_DEG, near=0.02, far=10.0),
+                CAMERA_CONFIG.with_overrides(camera),
+                link="camera_link",
+                R_link_optical=OPTICAL_FORWARD,
+            )
+        )
+
+    def footprint_corners(self) -> np.ndarray:
+        """The four corners of the footprint rectangle in the world frame, ``(4, 3)`` (m)."""
+        p, q = self.footprint_pose()
+        R = np.array(pybullet.getMatrixFromQuaternion(q)).reshape(3, 3)
+        half_l, half_w = self.size[0] / 2, self.size[1] / 2
+        local = np.array(
+            [[half_l, half_w, 0.0], [half_l, -half_w, 0.0], [-half_l, -half_w, 0.0], [-half_l, half_w, 0.0]]
+        )
+        return p + local @ R.T
+
+    def set_carrier(self, carrier: MotherUGV | None) -> None:
+        """Hand the base over to ``carrier`` (drive suspended) or take it back (``None``: drive resumes here)."""
+        self.carrier = carrier
+        if carrier is not None:
+            self.diff_drive.stop()
+            pybullet.changeConstraint(self.diff_drive.constraint, maxForce=0.0, physicsClientId=self.cid)
+        else:
+            p, q = self.pose()
+            self.diff_drive.teleport(p, yaw_of(q))
+
+    def drive(self, v: float, omega: float) -> None:
+        """Command ``v`` (m/s) and ``omega`` (rad/s); ignored while carried by the mother."""
+        if self.carrier is None:
+            super().drive(v, omega)
+
+    def pre_physics(self, dt: float) -> None:
+        """Advance the drive, unless the mother is carrying this child."""
+        if self.carrier is None:
+            self.diff_drive.pre_physics(dt)
+
+    def state(self) -> dict[str, Any]:
+        """Pose, speeds, and the name of the carrier (``None`` on the ground)."""
+        state = super().state()
+        state["carrier"] = self.carrier.name if self.carrier is not None else None
+        return state
+
+
+class MotherUGV(WheeledRobot):
+    """Mother UGV with a lifting docking station at its rear (entrance facing the base's -x).
+
+    Links: ``base_link``, ``base_footprint``, ``lift_platform`` (frame at the
+    centre of the plate's top surface, prismatic ``lift_joint`` along z,
+    0 … 0.30 m), ``benchmark`` (frame at I_h on the benchmark's face; the
+    child approaches along the base's +x, its image left is the base's +y).
+
+    Args:
+        pose: footprint pose ``[x, y]``, ``[x, y, yaw]`` or ``[x, y, z, yaw]`` (world frame, m, rad).
+        limits: drive limits replacing :data:`MOTHER_LIMITS`, whole or by field.
+
+    Attributes:
+        entrance_width: b_e (m).
+        lift_travel: platform height at the storage capsule (m).
+        plate_size: ``(length, width)`` of the platform's floor plate (m), from the URDF.
+        carried: the children welded to the platform now.
+    """
+
+    kind = "mother_ugv"
+    urdf = "mother_ugv.urdf"
+    default_limits = MOTHER_LIMITS
+
+    def __init__(
+        self,
+        world: World,
+        name: str,
+        pose: Sequence[float] = (0.0, 0.0, 0.0),
+        limits: DiffDriveLimits | Mapping[str, float] | None = None,
+    ):
+        super().__init__(world, name, pose=pose, limits=limits)
+        self.entrance_width = ENTRANCE_WIDTH_M
+        self.lift_travel = LIFT_TRAVEL_M
+        self.lift_joint = self.link_index("lift_platform")  # a link's index is its parent joint's
+        self.benchmark_link = self.link_index("benchmark")
+        plate = pybullet.getCollisionShapeData(self.body_id, self.lift_joint, physicsClientId=self.cid)[0]
+        self.plate_size: tuple[float, float] = (float(plate[3][0]), float(plate[3][1]))
+        self.carried: dict[str, tuple[ChildUGV, int]] = {}
+        self._lift_target = 0.0
+        floor = world.scene.floor
+        if floor is not None:  # the lowered plate is sunk flush into the floor
+            pybullet.setCollisionFilterPair(
+                self.body_id, floor.body_id, self.lift_joint, -1, 0, physicsClientId=self.cid
+            )
+        self._command_lift(0.0)
+
+    # ------------------------------------------------------------ platform
+    def _command_lift(self, height: float) -> None:
+        self._lift_target = height
+        pybullet.setJointMotorControl2(
+            self.body_id,
+            self.lift_joint,
+            pybullet.POSITION_CONTROL,
+            targetPosition=height,
+            force=LIFT_FORCE_N,
+            maxVelocity=LIFT_SPEED_MPS,
+            physicsClientId=self.cid,
+        )
+
+    def platform_height(self) -> float:
+        """Height of the platform above its lowered position (m): 0 on the floor, :attr:`lift_travel` at the capsule."""
+        return float(pybullet.getJointState(self.body_id, self.lift_joint, physicsClientId=self.cid)[0])
+
+    def platform_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """World pose of the centre of the platform plate's top surface."""
+        return self.link_pose(self.lift_joint)
+
+    def benchmark_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """World pose of I_h, the crossing of the benchmark's colour borders (frame x points into the station)."""
+        return self.link_pose(self.benchmark_link)
+
+    def entrance_pose(self) -> tuple[np.ndarray, float]:
+        """Centre of the entrance on the floor (world frame, m) and the heading (rad) a child must have to drive in."""
+        p_entrance, q = self.benchmark_pose()  # the benchmark hangs in the entrance plane
+        p_entrance[2] = self.footprint_pose()[0][2]
+        return p_entrance, yaw_of(q)
+
+    def child_on_platform(self, child: ChildUGV) -> bool:
+        """Whether ``child`` stands wholly on the platform plate, inside the entrance walls.
+
+        Every footprint corner must lie within the plate's length and within
+        the entrance width across, and the footprint within 2 cm of the plate's top.
+        """
+        p_plate, q = self.platform_pose()
+        R = np.array(pybullet.getMatrixFromQuaternion(q)).reshape(3, 3)
+        corners = (child.footprint_corners() - p_plate) @ R  # in the platform frame
+        return bool(
+            np.all(np.abs(corners[:, 0]) <= self.plate_size[0] / 2)
+            and np.all(np.abs(corners[:, 1]) <= self.entrance_width / 2)
+            and np.all(np.abs(corners[:, 2]) <= 0.02)
+        )
+
+    def raise_platform(self) -> list[str]:
+        """Lift the platform to the storage capsule, carrying the children standing on it.
+
+        Returns the names of the children taken up (welded to the platform).
+        """
+        for robot in self.world.robots.values():
+            if isinstance(robot, ChildUGV) and robot.carrier is None and self.child_on_platform(robot):
+                self._attach(robot)
+        self._command_lift(self.lift_travel)
+        return list(self.carried)
+
+    def lower_platform(self) -> None:
+        """Bring the platform down to the floor; carried children are released once it is there."""
+        self._command_lift(0.0)
+
+    def _attach(self, child: ChildUGV) -> None:
+        child.set_carrier(self)
+        constraint = weld(self.body_id, self.lift_joint, child.body_id, -1, CARRY_FORCE_N, self.cid)
+        self.carried[child.name] = (child, constraint)
+
+    def _release_all(self) -> None:
+        for child, constraint in self.carried.values():
+            pybullet.removeConstraint(constraint, physicsClientId=self.cid)
+            child.set_carrier(None)
+        self.carried.clear()
+
+    # ------------------------------------------------------------ commands
+    def safe_stop(self) -> None:
+        """Stop the base and hold the platform where it is."""
+        self.stop()
+        self._command_lift(self.platform_height())
+
+    def pre_physics(self, dt: float) -> None:
+        """Advance the drive; release carried children once the platform is back on the floor."""
+        self.diff_drive.pre_physics(dt)
+        if self.carried and self._lift_target == 0.0 and self.platform_height() < LOWERED_TOLERANCE_M:
+            self._release_all()
+
+    def state(self) -> dict[str, Any]:
+        """Pose, speeds, platform height (m) and the names of the carried children."""
+        state = super().state()
+        state.update(platform_height=self.platform_height(), carried=list(self.carried))
+        return state
