@@ -404,7 +404,7 @@ class TeamMember(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
     robot: str = Field(description="Robot kind (see world/robots ROBOT_KINDS).")
-    pose: list[float] | None = Field(None, description="Start pose [x, y, z] or [x, y, z, yaw] (m, rad, world frame).")
+    pose: list[float] | None = Field(None, description="Start pose [x, y], [x, y, yaw] (ground robots) or [x, y, z, yaw] (m, rad, world frame).")
     stored_on: str | None = Field(None, description="Team member that carries this robot at the start.")
     sensors: dict[str, Any] = Field(default_factory=dict, description="Sensor configurations by sensor name.")
     options: dict[str, Any] = Field(default_factory=dict, description="Options passed to the robot constructor.")

@@ -142,7 +142,7 @@ class RotorPowerModel:
     With the motors off the robot draws nothing (Narváez §V-B: zero energy
     while stored on the end effector).
 
-    Calibration of the Bebop 2 (Narváez §V-A: "autonomy of 20 min", 2700 mAh 3S):
+    Calibration of the Bebop 2 (Narváez §V-B: "autonomy of 20 min", 2700 mAh 3S):
     the pack holds 2.7 Ah × 11.48 V mean open-circuit voltage = 31.0 Wh on
     :data:`LIPO_CELL_V`. Four 0.15 m rotors (A = 0.0707 m²) lifting 0.50 kg
     (T = 4.905 N) need ``T^1.5 / sqrt(2 ρ A)`` = 26.1 W of ideal induced power;

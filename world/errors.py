@@ -24,7 +24,7 @@ class UnknownNameError(WorldError, KeyError):
         close = difflib.get_close_matches(name, self.known, n=1)
         hint = f" Did you mean '{close[0]}'?" if close else ""
         super().__init__(
-            f"unknown {kind} '{name}'.{hint} Known {kind}s: {', '.join(self.known) or '(none)'}"
+            f"unknown {kind} '{name}'.{hint} Known: {', '.join(self.known) or '(none)'}"
         )
 
     def __str__(self) -> str:  # KeyError would quote the message

@@ -173,7 +173,8 @@ class World:
         """Create a robot of ``kind`` (e.g. ``"bebop2"``) named ``name`` (default: the kind).
 
         ``options`` go to the robot's constructor (``pose``, sensor settings, …).
-        Raises :class:`UnknownNameError` for an unknown kind or a duplicate name.
+        Raises :class:`UnknownNameError` (listing the kinds) for an unknown kind and
+        :class:`ValueError` for a name already in the world.
         """
         from .robots import robot_class
 

@@ -176,6 +176,7 @@ class MobileManipulator(WheeledRobot):
     ):
         sensor_specs = _sensor_specs(self.kind, sensors or {})  # bad settings fail before anything is built
         docking_settings = _docking_settings(docking or {})
+        initial_q = self._configuration(arm_pose)
         super().__init__(world, name, pose=pose, limits=limits)
         cid = self.cid
         joints = {}
@@ -195,7 +196,7 @@ class MobileManipulator(WheeledRobot):
             max_torque=self.max_torque,
         )
         self.arm_kinematics = ArmKinematics.from_urdf(self.urdf, ARM_BASE_LINK, PART_A_LINK)
-        self.reset_arm(arm_pose)
+        self.reset_arm(initial_q)
         self.docking = DockingDevice(self, PART_A_LINK, **docking_settings)
         self._add_sensors(sensor_specs)
 
@@ -221,9 +222,10 @@ class MobileManipulator(WheeledRobot):
         except KeyError:
             raise UnknownNameError("arm pose", name, ARM_POSES) from None
 
-    def _configuration(self, q: str | Sequence[float]) -> np.ndarray:
+    @classmethod
+    def _configuration(cls, q: str | Sequence[float]) -> np.ndarray:
         if isinstance(q, str):
-            return self.arm_pose(q)
+            return cls.arm_pose(q)
         q = np.asarray(q, dtype=float)
         if q.shape != (len(ARM_JOINTS),):
             raise ValueError(

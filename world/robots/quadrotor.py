@@ -3,7 +3,7 @@
 One :class:`Quadrotor` class serves every kind; a :class:`QuadrotorSpec`
 holds what differs (URDF, limits, drag, battery, power model, sensors):
 
-- ``bebop2``  Parrot Bebop 2, 0.50 kg (Narváez 2020, §V-A): front camera,
+- ``bebop2``  Parrot Bebop 2, 0.50 kg (Narváez 2020, §V-B): front camera,
   AprilTag bundle (link ``tag_bundle``) and docking adapter (link ``part_b``).
 - ``ardrone2`` Parrot AR.Drone 2.0, indoor hull, 0.42 kg (Palafox 2019):
   QVGA vertical camera (link ``camera_bottom``) and sonar.
@@ -14,7 +14,7 @@ Flight model (pybullet forces, every physics step, plain ``math``):
 1. Command: ``command_velocity(vx, vy, vz, yaw_rate, frame)``; ``"body"``
    is the heading frame (yaw-only rotation, re-evaluated every step as the
    vehicle turns), ``"world"`` the world frame. Commands are clipped to the
-   kind's :class:`FlightLimits` (Bebop 2: 4 m/s lateral, 1 m/s vertical, §V-A).
+   kind's :class:`FlightLimits` (Bebop 2: 4 m/s lateral, 1 m/s vertical, §V-B).
 2. Reference model: the reference acceleration follows a target with the
    attitude lag ``tau = 2 / attitude_omega``; the target brings the predicted
    reference velocity ``v_ref + a_ref tau`` onto the command, clipped to
@@ -194,15 +194,15 @@ BEBOP2 = QuadrotorSpec(
     urdf="bebop2.urdf",
     landed_height=0.086,
     limits=FlightLimits(
-        max_speed_xy=4.0,  # §V-A: 4 m/s lateral
-        max_speed_z=1.0,  # §V-A: 1 m/s vertical
+        max_speed_xy=4.0,  # §V-B: 4 m/s lateral
+        max_speed_z=1.0,  # §V-B: 1 m/s vertical
         max_yaw_rate=math.radians(100.0),
         max_tilt=math.radians(20.0),
         accel_ref=2.5,
     ),
     drag=Drag(linear=0.35, quadratic=0.05),
     battery=BatterySpec(capacity_mAh=2700.0, cells=3, charge_current_A=3.5, charge_voltage_V=12.6),  # §V-A
-    # Calibration (Narváez §V-A: "autonomy of 20 min", 2700 mAh): the 3S pack
+    # Calibration (Narváez §V-B: "autonomy of 20 min", 2700 mAh): the 3S pack
     # holds 31.0 Wh on the LIPO_CELL_V curve; 4 rotors of 0.15 m (A = 0.0707 m²)
     # lifting 0.50 kg need 26.1 W ideal induced power; FM 0.55 × η 0.60 gives
     # 79.1 W mechanical+electrical losses + 6 W avionics = 85.1 W -> 21.9 min hover.
