@@ -11,6 +11,10 @@ Speed: TinyRenderer's cost grows with the pixels that geometry covers
 The scene's flat floor therefore has no visual shape in headless worlds;
 the camera fills it in analytically (ray–plane intersection in numpy) where
 nothing else was drawn, with the same colour, depth and segmentation id.
+Everything after the render works in place on pybullet's own arrays in
+float32: the floor is computed only inside the image rectangle where it can
+appear (nothing when it is out of view), its colour is written as one packed
+32-bit RGBA value per pixel, and RGBA → RGB is a single OpenCV conversion.
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+import cv2
 import numpy as np
 import pybullet
 
@@ -57,10 +62,19 @@ class Intrinsics:
         return np.array([[f, 0.0, (self.width - 1) / 2.0], [0.0, f, (self.height - 1) / 2.0], [0.0, 0.0, 1.0]])
 
     def projection_matrix(self) -> list[float]:
-        """OpenGL projection matrix pybullet expects for these intrinsics."""
-        return pybullet.computeProjectionMatrixFOV(
-            self.fov_v_deg, self.width / self.height, self.near, self.far
+        """OpenGL projection matrix (column-major) for TinyRenderer that renders exactly :attr:`K`.
+
+        TinyRenderer samples each pixel at its corner rather than its centre,
+        which alone would put the rendered principal point at ``(w/2, h/2 - 1)``;
+        shifting normalised device coordinates by half a pixel (-0.5 px in u,
+        +0.5 px in v) places it at ``K``'s ``((w-1)/2, (h-1)/2)``.
+        """
+        projection = list(
+            pybullet.computeProjectionMatrixFOV(self.fov_v_deg, self.width / self.height, self.near, self.far)
         )
+        projection[8] += 1.0 / self.width  # x_ndc += -1/w · w_clip (w_clip = -z_eye): -0.5 px in u
+        projection[9] += 1.0 / self.height  # y_ndc += -1/h · w_clip: +0.5 px in v (rows grow downwards)
+        return projection
 
 
 @dataclass(frozen=True)
@@ -113,16 +127,17 @@ class Camera(Sensor[CameraFrame]):
         self.segmentation = segmentation
         self.depth_noise_per_m = depth_noise_per_m
         self._projection = intrinsics.projection_matrix()
-        K = intrinsics.K
-        u, v = np.meshgrid(np.arange(intrinsics.width), np.arange(intrinsics.height))
-        # x, y of each pixel's optical ray with z = 1, so depth == ray parameter
-        self._ray_x = ((u - K[0, 2]) / K[0, 0]).astype(np.float32)
-        self._ray_y = ((v - K[1, 2]) / K[1, 1]).astype(np.float32)
+        K = self._K = intrinsics.K
+        # x of each column's and y of each row's optical ray with z = 1, so depth == ray parameter
+        self._ray_x = ((np.arange(intrinsics.width) - K[0, 2]) / K[0, 0]).astype(np.float32)
+        self._ray_y = ((np.arange(intrinsics.height) - K[1, 2]) / K[1, 1]).astype(np.float32)
+        self._x_first, self._x_last = float(self._ray_x[0]), float(self._ray_x[-1])
+        self._y_first, self._y_last = float(self._ray_y[0]), float(self._ray_y[-1])
 
     @property
     def K(self) -> np.ndarray:
         """3×3 intrinsics of this camera (pixels)."""
-        return self.intrinsics.K
+        return self._K.copy()
 
     def optical_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """Position (m) and ``R_world_optical`` of the optical frame now."""
@@ -146,21 +161,54 @@ class Camera(Sensor[CameraFrame]):
             flags=flags,
             physicsClientId=self.world.client_id,
         )
+        # pybullet hands over fresh arrays: work on them in place
         rgba = np.asarray(rgba, dtype=np.uint8).reshape(intr.height, intr.width, 4)
-        rgb = np.ascontiguousarray(rgba[..., :3])
-        zbuf = np.asarray(zbuf, dtype=np.float32).reshape(intr.height, intr.width)
+        depth = np.asarray(zbuf, dtype=np.float32).reshape(intr.height, intr.width)
+        empty = depth >= 1.0 - 1e-7  # z-buffer still at the far plane: nothing drawn
         near, far = intr.near, intr.far
-        depth = (far * near / (far - (far - near) * zbuf)).astype(np.float32)
+        np.multiply(depth, far - near, out=depth)  # z-buffer -> metres: far·near / (far - (far - near)·z)
+        np.subtract(far, depth, out=depth)
+        np.divide(far * near, depth, out=depth)
         segmentation = (
             np.asarray(seg, dtype=np.int32).reshape(intr.height, intr.width) if self.segmentation else None
         )
-        self._fill_floor(rgb, depth, segmentation, position, R, zbuf >= 1.0 - 1e-7)
+        self._fill_floor(rgba, depth, segmentation, position, R, empty)
+        rgb = cv2.cvtColor(rgba, cv2.COLOR_RGBA2RGB)
         self._add_noise(rgb, depth)
-        return CameraFrame(rgb, depth, segmentation, intr.K, position, R)
+        return CameraFrame(rgb, depth, segmentation, self._K.copy(), position, R)
+
+    def _floor_window(self, r_z: np.ndarray, d: float) -> tuple[slice, slice] | None:
+        """Rows and columns bounding the pixels whose rays meet the floor between near and far.
+
+        ``r_z`` is the world-z row of ``R_world_optical`` and ``d`` the floor
+        height minus the camera height (m). A ray's world z per unit depth,
+        ``r_z · (x, y, 1)``, is linear in the pixel, and the floor is hit at
+        depth ``d / (r_z · ray)`` in (near, far) exactly when that value lies
+        between ``d / near`` and ``d / far``; the window is widened by a pixel
+        so that float32 rounding never loses an edge pixel. ``None``: floor out of view.
+        """
+        if d == 0.0:
+            return None
+        lo, hi = sorted((d / self.intrinsics.near, d / self.intrinsics.far))
+        lo, hi = lo - 1e-5 * (1.0 + abs(lo)), hi + 1e-5 * (1.0 + abs(hi))
+        rx, ry, rz = float(r_z[0]), float(r_z[1]), float(r_z[2])
+        x_ends = (rx * self._x_first, rx * self._x_last)  # x term of the first and last column
+        y_ends = (ry * self._y_first, ry * self._y_last)
+        rows = self._band(ry * self._ray_y, rz + min(x_ends), rz + max(x_ends), lo, hi)
+        cols = self._band(rx * self._ray_x, rz + min(y_ends), rz + max(y_ends), lo, hi)
+        return None if rows is None or cols is None else (rows, cols)
+
+    @staticmethod
+    def _band(values: np.ndarray, low_add: float, high_add: float, lo: float, hi: float) -> slice | None:
+        """Slice (widened by one) of the indices whose range ``values + [low_add, high_add]`` meets (lo, hi)."""
+        inside = np.flatnonzero((values > lo - high_add) & (values < hi - low_add))
+        if inside.size == 0:
+            return None
+        return slice(max(int(inside[0]) - 1, 0), int(inside[-1]) + 2)
 
     def _fill_floor(
         self,
-        rgb: np.ndarray,
+        rgba: np.ndarray,
         depth: np.ndarray,
         segmentation: np.ndarray | None,
         position: np.ndarray,
@@ -168,23 +216,34 @@ class Camera(Sensor[CameraFrame]):
         empty: np.ndarray,
     ) -> None:
         floor = self.world.scene.floor
-        if floor is None or not floor.analytic or not empty.any():
+        if floor is None or not floor.analytic:
             return
+        window = self._floor_window(R[2], floor.height - float(position[2]))
+        if window is None:
+            return
+        rows, cols = window
         r = R[2].astype(np.float32)
-        rays_z = r[0] * self._ray_x + r[1] * self._ray_y + r[2]  # world z per unit depth
+        rays_z = r[0] * self._ray_x[cols] + r[1] * self._ray_y[rows, None]  # world z per unit depth
+        rays_z += r[2]
         with np.errstate(divide="ignore", invalid="ignore"):
-            t = np.float32(floor.height - position[2]) / rays_z
-        hit = (t > self.intrinsics.near) & (t < self.intrinsics.far) & empty
-        np.copyto(depth, t, where=hit)
-        np.copyto(rgb, np.array(floor.rgb, dtype=np.uint8), where=hit[..., None])
+            t = np.divide(np.float32(floor.height - position[2]), rays_z, out=rays_z)
+        hit = (t > self.intrinsics.near) & (t < self.intrinsics.far) & empty[rows, cols]
+        np.copyto(depth[rows, cols], t, where=hit)
+        rgba32 = rgba.view(np.uint32)[..., 0]  # one packed RGBA value per pixel
+        np.copyto(rgba32[rows, cols], np.array([*floor.rgb, 255], dtype=np.uint8).view(np.uint32), where=hit)
         if segmentation is not None:
-            np.copyto(segmentation, floor.body_id, where=hit)
+            np.copyto(segmentation[rows, cols], floor.body_id, where=hit)
 
     def _add_noise(self, rgb: np.ndarray, depth: np.ndarray) -> None:
         std = self.config.noise_std
         if std > 0:
-            noisy = rgb + self.rng.normal(0.0, std, rgb.shape)
+            noisy = self.rng.standard_normal(rgb.shape, dtype=np.float32)
+            noisy *= std
+            noisy += rgb
             np.clip(noisy, 0, 255, out=noisy)
-            rgb[...] = noisy.astype(np.uint8)
+            np.copyto(rgb, noisy, casting="unsafe")  # truncates like astype(uint8)
         if self.depth_noise_per_m > 0:
-            depth += (self.rng.normal(0.0, 1.0, depth.shape) * self.depth_noise_per_m * depth).astype(np.float32)
+            noise = self.rng.standard_normal(depth.shape, dtype=np.float32)
+            noise *= self.depth_noise_per_m
+            noise *= depth
+            depth += noise
