@@ -113,7 +113,7 @@ def test_bodies_are_named_by_robot_scene_label_or_id():
 
 
 def test_unknown_body_or_link_names_list_the_known_ones(world):
-    with pytest.raises(UnknownNameError, match="unknown body name 'uav'.*Known body names: arm"):
+    with pytest.raises(UnknownNameError, match="unknown body name 'uav'.*Known: arm"):
         contacts_between(world, "uav", "arm")
     with pytest.raises(UnknownNameError, match="unknown arm link 'part_b'. Did you mean 'part_a'"):
         ContactMonitor(world, "arm", "arm", allowed_links_a=["part_b"])

@@ -22,6 +22,7 @@ import pybullet
 from pybullet_utils.bullet_client import BulletClient
 
 from .errors import UnknownNameError
+from .quiet import quiet_fd
 
 if TYPE_CHECKING:
     from .robots.base import Robot
@@ -100,7 +101,8 @@ class World:
     ):
         self.seed = int(seed)
         self.clock = SimClock(physics_hz=physics_hz)
-        self.bullet = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
+        with quiet_fd(1):  # pybullet's C code prints "argv[0]=" on every connect
+            self.bullet = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
         self.client_id: int = self.bullet._client
         self.rng = np.random.default_rng(self.seed)
         self.wind: Any = _Wind()

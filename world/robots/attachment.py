@@ -8,9 +8,12 @@ the links' centre-of-mass frames; :func:`weld` takes care of that.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pybullet
+
+if TYPE_CHECKING:
+    from .base import Robot
 
 
 def _com_pose(body: int, link: int, cid: int) -> tuple[Any, Any]:
@@ -42,3 +45,16 @@ def set_collisions(
     for link_a in links_a:
         for link_b in links_b:
             pybullet.setCollisionFilterPair(body_a, body_b, link_a, link_b, int(enabled), physicsClientId=cid)
+
+
+def place_link_at(robot: Robot, link: str, position: Sequence[float], orientation: Sequence[float]) -> None:
+    """Teleport ``robot`` at rest so that its ``link`` frame lands on the given world pose (m, [x, y, z, w])."""
+    cid = robot.cid
+    p_base, q_base = pybullet.getBasePositionAndOrientation(robot.body_id, physicsClientId=cid)
+    p_link, q_link = robot.link_pose(link)
+    p_inv, q_inv = pybullet.invertTransform(p_base, q_base)
+    p_base_link, q_base_link = pybullet.multiplyTransforms(p_inv, q_inv, list(p_link), list(q_link))
+    p_link_base, q_link_base = pybullet.invertTransform(p_base_link, q_base_link)
+    p_new, q_new = pybullet.multiplyTransforms(list(position), list(orientation), p_link_base, q_link_base)
+    pybullet.resetBasePositionAndOrientation(robot.body_id, p_new, q_new, physicsClientId=cid)
+    pybullet.resetBaseVelocity(robot.body_id, (0, 0, 0), (0, 0, 0), physicsClientId=cid)

@@ -40,6 +40,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet
 
+from .attachment import place_link_at, set_collisions, weld
+
 if TYPE_CHECKING:
     from .base import Robot
 
@@ -252,19 +254,16 @@ class DockingDevice:
                 self.carrier.body_id, self.link, on_a, p_a.tolist(), pybullet.WORLD_FRAME, physicsClientId=cid
             )
 
+    def attach_now(self, uav: Robot) -> None:
+        """Put ``uav``'s Part B on Part A and lock at once (a UAV that starts the run stored)."""
+        if self.docked is not None:
+            raise ValueError(f"{self.carrier.name}'s Part A already holds {self.docked.name}")
+        place_link_at(uav, "part_b", *self.carrier.link_pose(self.link))
+        self._attach(uav)
+
     def _attach(self, uav: Robot) -> None:
-        """Fix ``uav``'s base to Part A at their current relative pose (pybullet frames are COM frames)."""
-        cid = self.cid
-        state = pybullet.getLinkState(self.carrier.body_id, self.link, physicsClientId=cid)
-        p_com_a, q_com_a = state[0], state[1]
-        p_uav, q_uav = pybullet.getBasePositionAndOrientation(uav.body_id, physicsClientId=cid)
-        inv_p, inv_q = pybullet.invertTransform(p_com_a, q_com_a)
-        p_rel, q_rel = pybullet.multiplyTransforms(inv_p, inv_q, p_uav, q_uav)
-        self._constraint = pybullet.createConstraint(
-            self.carrier.body_id, self.link, uav.body_id, -1, pybullet.JOINT_FIXED, [0, 0, 0],
-            p_rel, [0, 0, 0], q_rel, [0, 0, 0, 1], physicsClientId=cid,
-        )
-        pybullet.changeConstraint(self._constraint, maxForce=LOCK_FORCE, physicsClientId=cid)
+        """Fix ``uav``'s base to Part A at their current relative pose."""
+        self._constraint = weld(self.carrier.body_id, self.link, uav.body_id, -1, LOCK_FORCE, self.cid)
         self.docked = uav
         self._set_collisions(uav, enable=False)
         if hasattr(uav, "on_docked"):
@@ -272,9 +271,7 @@ class DockingDevice:
 
     def _set_collisions(self, uav: Robot, enable: bool) -> None:
         """A docked UAV is part of the carrier: no contacts between the two while locked."""
-        cid = self.cid
-        for link_a in self.carrier.links.values():
-            for link_b in uav.links.values():
-                pybullet.setCollisionFilterPair(
-                    self.carrier.body_id, uav.body_id, link_a, link_b, int(enable), physicsClientId=cid
-                )
+        set_collisions(
+            self.carrier.body_id, list(self.carrier.links.values()), uav.body_id, list(uav.links.values()),
+            enable, self.cid,
+        )

@@ -47,6 +47,7 @@ from .wheeled import WheeledRobot
 
 if TYPE_CHECKING:
     from ..world import World
+    from .base import Robot
 
 ARM_JOINTS = tuple(f"arm_joint_{i}" for i in range(1, 7))
 """Arm joints, base to tip: yaw, shoulder pitch, elbow pitch, wrist roll, wrist pitch, flange roll."""
@@ -212,6 +213,11 @@ class MobileManipulator(WheeledRobot):
         self.lidar: Lidar = self.add_sensor(  # type: ignore[assignment]
             Lidar(self, "lidar", spec, config, link=SENSOR_LINKS["lidar"])
         )
+
+    def store(self, uav: Robot) -> None:
+        """Start the run with ``uav`` stored: arm in the ``storage`` pose, UAV locked on Part A, charging."""
+        self.reset_arm("storage")
+        self.docking.attach_now(uav)
 
     # ------------------------------------------------------------------ arm
     @staticmethod

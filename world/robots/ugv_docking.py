@@ -46,7 +46,7 @@ import pybullet
 
 from ..sensors.base import SensorConfig
 from ..sensors.camera import OPTICAL_FORWARD, Camera, Intrinsics
-from .attachment import weld
+from .attachment import place_link_at, weld
 from .base import yaw_of
 from .diff_drive import DiffDriveLimits
 from .wheeled import WheeledRobot
@@ -256,6 +256,13 @@ class MotherUGV(WheeledRobot):
                 self._attach(robot)
         self._command_lift(self.lift_travel)
         return list(self.carried)
+
+    def store(self, child: ChildUGV) -> None:
+        """Start the run with ``child`` stored: platform up at the capsule with the child welded on it."""
+        pybullet.resetJointState(self.body_id, self.lift_joint, self.lift_travel, physicsClientId=self.cid)
+        self._command_lift(self.lift_travel)
+        place_link_at(child, "base_footprint", *self.platform_pose())
+        self._attach(child)
 
     def lower_platform(self) -> None:
         """Bring the platform down to the floor; carried children are released once it is there."""
