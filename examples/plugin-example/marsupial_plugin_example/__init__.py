@@ -1,0 +1,1 @@
+"""Example marsupial plug-in: a metered hover skill and an altitude condition."""

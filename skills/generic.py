@@ -1,0 +1,132 @@
+"""Generic skills to build missions and tests on: wait, goto (UAV), hover (UAV), drive_to (ground).
+
+Each skill declares its typed parameters, the robot kinds it drives and its
+life cycle (start / step / finish); ``finish`` is the base class's: the
+robot is left safe (hovering, wheels stopped) through the arbiter.
+Positions are in the world frame (m), speeds in m/s, times in simulated s.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import ClassVar, Literal
+
+import numpy as np
+from py_trees.common import Status
+from pydantic import Field
+
+from marsupial.trees.skill import NodeParams, Skill
+from marsupial.world.robots.base import yaw_of
+
+#: robot classes the skills below accept (any kind whose class derives from them)
+AERIAL = ("Quadrotor",)
+GROUND = ("WheeledRobot",)
+
+
+class Wait(Skill):
+    """Do nothing for a number of simulated seconds, then succeed."""
+
+    class Params(NodeParams):
+        seconds: float = Field(1.0, ge=0.0)
+        """How long to wait (simulated s)."""
+
+    uses_robot: ClassVar[bool] = False
+
+    def start(self) -> None:
+        self._until = self.world.now + self.params.seconds
+
+    def step(self) -> Status:
+        left = self._until - self.world.now
+        self.feedback_message = f"{max(left, 0.0):.1f} s left"
+        return Status.SUCCESS if left <= 1e-9 else Status.RUNNING
+
+
+class Goto(Skill):
+    """Fly a UAV to a world-frame point (proportional velocity command, speed-limited)."""
+
+    class Params(NodeParams):
+        target: tuple[float, float, float]
+        """Point to reach, world frame (m)."""
+        tolerance: float = Field(0.15, gt=0.0)
+        """Distance (m) at which the point counts as reached."""
+        speed: float = Field(1.0, gt=0.0)
+        """Speed limit (m/s)."""
+        gain: float = Field(1.0, gt=0.0)
+        """Proportional gain from position error to velocity (1/s)."""
+        then: Literal["hover", "motors_off"] = "hover"
+        """What the UAV does on arrival: hover there, or switch the motors off (to land near the floor)."""
+
+    robot_kinds = AERIAL
+
+    def start(self) -> None:
+        self.robot.set_motors(True)
+
+    def step(self) -> Status:
+        p, _ = self.robot.pose()
+        error = np.asarray(self.params.target) - p
+        distance = float(np.linalg.norm(error))
+        self.feedback_message = f"{distance:.2f} m to go"
+        if distance <= self.params.tolerance:
+            return Status.SUCCESS
+        v = self.params.gain * error
+        speed = float(np.linalg.norm(v))
+        if speed > self.params.speed:
+            v *= self.params.speed / speed
+        self.robot.command_velocity(v[0], v[1], v[2], 0.0, frame="world")
+        return Status.RUNNING
+
+    def finish(self, status: Status) -> None:
+        if status == Status.SUCCESS and self.params.then == "motors_off":
+            self.robot.set_motors(False)
+        else:
+            self.leave_safe()
+
+
+class Hover(Skill):
+    """Hold a UAV in place for a number of simulated seconds, then succeed."""
+
+    class Params(NodeParams):
+        seconds: float = Field(1.0, ge=0.0)
+        """How long to hover (simulated s)."""
+
+    robot_kinds = AERIAL
+
+    def start(self) -> None:
+        self._until = self.world.now + self.params.seconds
+
+    def step(self) -> Status:
+        self.robot.hover()
+        left = self._until - self.world.now
+        self.feedback_message = f"hovering, {max(left, 0.0):.1f} s left"
+        return Status.SUCCESS if left <= 1e-9 else Status.RUNNING
+
+
+class DriveTo(Skill):
+    """Drive a ground robot to a point of the floor (turn towards it, then drive; unicycle law)."""
+
+    class Params(NodeParams):
+        target: tuple[float, float]
+        """Point to reach, world frame (x, y in m)."""
+        tolerance: float = Field(0.2, gt=0.0)
+        """Distance (m) at which the point counts as reached."""
+        speed: float = Field(0.5, gt=0.0)
+        """Forward speed limit (m/s)."""
+        turn_rate: float = Field(1.0, gt=0.0)
+        """Turn-rate limit (rad/s)."""
+        heading_gain: float = Field(2.0, gt=0.0)
+        """Proportional gain from heading error to turn rate (1/s)."""
+
+    robot_kinds = GROUND
+
+    def step(self) -> Status:
+        p, q = self.robot.pose()
+        dx, dy = self.params.target[0] - p[0], self.params.target[1] - p[1]
+        distance = math.hypot(dx, dy)
+        self.feedback_message = f"{distance:.2f} m to go"
+        if distance <= self.params.tolerance:
+            return Status.SUCCESS
+        heading_error = math.remainder(math.atan2(dy, dx) - yaw_of(q), math.tau)
+        omega = max(-self.params.turn_rate, min(self.params.turn_rate, self.params.heading_gain * heading_error))
+        v = min(self.params.speed, distance) * max(0.0, math.cos(heading_error))
+        self.robot.drive(v, omega)
+        return Status.RUNNING

@@ -1,0 +1,295 @@
+"""The ``marsupial`` command: run, draw, export, list, validate, replay, verify and campaign missions.
+
+Exit codes: 0 success; 1 mission failure (or a verification mismatch);
+2 bad input (mission errors, unknown names, missing files — printed as one
+``file:line:column: ...`` message, no traceback); 130 after SIGINT and 143
+after SIGTERM (the log is closed cleanly first).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import shutil
+import sys
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import click
+from rich.console import Console
+from rich.table import Table
+
+import marsupial
+
+from .errors import MissionError
+
+#: mission run by ``marsupial run`` without a MISSION argument
+DEFAULT_MISSION = "demo_hover"
+
+_err = Console(stderr=True)
+
+
+@contextlib.contextmanager
+def bad_input() -> Iterator[None]:
+    """Print mission/world/log errors as one message on stderr and exit with code 2."""
+    from marsupial.world.errors import WorldError
+
+    from .replay import LogError
+
+    try:
+        yield
+    except (MissionError, WorldError, LogError) as err:
+        _err.print(f"[bold red]error:[/] {err}", highlight=False, markup=True, soft_wrap=True)
+        raise SystemExit(2) from None
+
+
+def _assignments(items: tuple[str, ...], what: str) -> dict[str, str]:
+    from .campaign import parse_assignments
+
+    return parse_assignments(items, what)
+
+
+def _write_text(text: str, output: str | None) -> None:
+    if output is None:
+        click.echo(text, nl=not text.endswith("\n"))
+    else:
+        Path(output).write_text(text)
+
+
+def _compiled(mission_ref: str, sets: tuple[str, ...]) -> Any:
+    from .compiler import compile_mission
+    from .mission import load_mission
+
+    return compile_mission(load_mission(mission_ref, _assignments(sets, "--set")))
+
+
+_set_option = click.option("--set", "sets", multiple=True, metavar="KEY=VALUE", help="Override a mission value (params.X, world.seed, run.until …).")
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(marsupial.__version__, prog_name="marsupial")
+def cli() -> None:
+    """Behaviour-tree missions for marsupial robot teams."""
+
+
+@cli.command()
+@click.argument("mission", required=False, default=DEFAULT_MISSION)
+@click.option("--seed", type=int, help="World seed (default: the mission's world.seed).")
+@click.option("--log", "log_path", type=click.Path(dir_okay=False), help="Write the run to this MCAP file.")
+@click.option("--until", type=float, help="Time limit in simulated seconds.")
+@click.option("--gui", is_flag=True, help="Open the pybullet GUI (paced to real time).")
+@_set_option
+@click.option("--operator", is_flag=True, help="Read operator commands from stdin ('command [reason]' per line); real-time pace.")
+@click.option("--record-images", is_flag=True, help="Record camera frames that skills log.")
+@click.option("--quiet", "-q", is_flag=True, help="No progress line and no summary table.")
+def run(mission: str, seed: int | None, log_path: str | None, until: float | None, gui: bool,
+        sets: tuple[str, ...], operator: bool, record_images: bool, quiet: bool) -> None:
+    """Run MISSION (a name or a .yaml path; default: the demo mission)."""
+    from .runner import run_mission
+
+    try:
+        with bad_input():
+            result = run_mission(
+                mission, seed=seed, log_path=log_path, until=until, gui=gui, progress=not quiet,
+                operator_stdin=operator, overrides=_assignments(sets, "--set"), record_images=record_images,
+            )
+    except KeyboardInterrupt:  # before the run loop took over the signal
+        sys.exit(130)
+    if result.outcome == "error":
+        _err.print(result.message, highlight=False, markup=False)
+    sys.exit(result.exit_code)
+
+
+@cli.command()
+@click.argument("mission")
+@click.option("--format", "fmt", type=click.Choice(["ascii", "dot", "svg"]), default="ascii", show_default=True)
+@click.option("--output", "-o", type=click.Path(dir_okay=False), help="Write to a file instead of stdout.")
+@_set_option
+def tree(mission: str, fmt: str, output: str | None, sets: tuple[str, ...]) -> None:
+    """Draw the compiled tree of MISSION (svg needs Graphviz's dot)."""
+    import py_trees
+
+    with bad_input():
+        if fmt == "svg" and shutil.which("dot") is None:
+            raise MissionError(
+                "cannot draw SVG: Graphviz's 'dot' program is not installed",
+                expected="graphviz installed (e.g. apt install graphviz), or --format dot / ascii",
+            )
+        root = _compiled(mission, sets).root
+        if fmt == "ascii":
+            text = py_trees.display.ascii_tree(root)
+        else:
+            graph = py_trees.display.dot_tree(root)
+            text = graph.to_string() if fmt == "dot" else graph.create_svg().decode()
+    _write_text(text, output)
+
+
+@cli.command()
+@click.argument("mission")
+@click.option("--format", "fmt", type=click.Choice(["btcpp-xml"]), default="btcpp-xml", show_default=True)
+@click.option("--output", "-o", type=click.Path(dir_okay=False), help="Write to a file instead of stdout.")
+@_set_option
+def export(mission: str, fmt: str, output: str | None, sets: tuple[str, ...]) -> None:
+    """Export the compiled tree of MISSION (BehaviorTree.CPP v4 XML, for Groot2)."""
+    from .btxml import to_btcpp_xml
+
+    with bad_input():
+        text = to_btcpp_xml(_compiled(mission, sets).root)
+    _write_text(text, output)
+
+
+@cli.command()
+def skills() -> None:
+    """List installed skills and conditions with their parameters, types, defaults and docs."""
+    from .registry import GROUPS, Registry, installed
+
+    console = Console()
+    registry = Registry()
+    for kind in GROUPS:
+        for name, providers in installed(kind).items():
+            for provider in providers:
+                title = f"{kind} [bold]{name}[/]  from {provider.distribution}: {provider.target}"
+                table = Table(title=title, title_justify="left")
+                for column in ("parameter", "type", "default", "description"):
+                    table.add_column(column)
+                try:
+                    cls = registry.resolve(kind, name) if len(providers) == 1 else _load(provider.target)
+                except MissionError as err:
+                    console.print(f"{kind} {name} ({provider}): [red]{err}[/]")
+                    continue
+                doc = cls.summary()
+                kinds = "no robot" if not cls.uses_robot else ", ".join(cls.robot_kinds or ("any robot",))
+                table.caption = f"{doc} Robots: {kinds}." + (f" Primary: {cls.primary}." if getattr(cls, "primary", None) else "")
+                table.caption_justify = "left"
+                for field_name, info in cls.Params.model_fields.items():
+                    annotation = _type_text(info.annotation)
+                    default = "(required)" if info.is_required() else repr(info.default)
+                    table.add_row(field_name, annotation, default, info.description or "")
+                for port, keys in (("reads", cls.reads), ("writes", cls.writes)):
+                    if keys:
+                        table.add_row(f"[dim]{port}[/]", "blackboard", ", ".join(keys), "")
+                console.print(table)
+
+
+def _type_text(annotation: Any) -> str:
+    """``float``, ``tuple[float, float, float]``, ``Literal['hover', 'motors_off']``."""
+    if getattr(annotation, "__origin__", None) is None and isinstance(annotation, type):
+        return annotation.__name__
+    return str(annotation).replace("typing.", "")
+
+
+def _load(target: str) -> Any:
+    from .registry import import_target
+
+    return import_target(target)
+
+
+@cli.command()
+def schema() -> None:
+    """Print the JSON Schema of mission files (for editors)."""
+    from .mission import mission_schema
+
+    click.echo(json.dumps(mission_schema(), indent=2))
+
+
+@cli.command()
+@click.argument("log", type=click.Path(dir_okay=False))
+def replay(log: str) -> None:
+    """Print the timeline of a run log."""
+    from .replay import format_timeline, read_log
+
+    with bad_input():
+        run_log = read_log(log)
+    meta = run_log.metadata
+    click.echo(f"# {meta.get('mission_name', '?')} seed={meta.get('seed', '?')} outcome={run_log.outcome} "
+               f"sim_time={run_log.sim_time}")
+    click.echo(format_timeline(run_log), nl=False)
+
+
+@cli.command()
+@click.argument("log", type=click.Path(dir_okay=False))
+def verify(log: str) -> None:
+    """Re-run the mission recorded in LOG (same text, seed, overrides, operator commands) and compare events."""
+    from .mission import parse_mission
+    from .operator import OperatorChannel
+    from .replay import LogError, compare_events, read_log
+    from .runner import run_mission
+
+    with bad_input():
+        original = read_log(log)
+        meta = original.metadata
+        if "mission" not in meta:
+            raise LogError(f"{log}: no mission in the log's metadata: not a marsupial run log")
+        if original.outcome in ("interrupted", "terminated", "incomplete"):
+            raise LogError(f"{log}: the run was {original.outcome}; only runs that ended by themselves can be verified")
+        path = Path(meta["mission_path"]) if meta.get("mission_path") else None
+        mission = parse_mission(
+            meta["mission"], str(path) if path else "<log>", json.loads(meta.get("overrides", "{}")),
+            path if path is not None and path.is_file() else None,
+        )
+        script = [(e.at, e.say, e.why) for e in mission.spec.operator]
+        live = [(e["t"], e["command"], e.get("why", ""), e["source"])
+                for e in original.events_of("operator") if e["source"] != "script"]
+        with tempfile.TemporaryDirectory(prefix="marsupial-verify-") as tmp:
+            fresh_path = Path(tmp) / "verify.mcap"
+            run_mission(
+                mission, seed=int(meta["seed"]), log_path=fresh_path, until=json.loads(meta.get("until", "null")),
+                progress=False, operator=OperatorChannel(script + live),
+            )
+            differences = compare_events(original, read_log(fresh_path))
+    if differences:
+        click.echo(f"{log}: the re-run differs from the log ({len(differences)} lines):", err=True)
+        click.echo("\n".join(differences[:60]), err=True)
+        sys.exit(1)
+    click.echo(f"{log}: verified, {len(original.events)} events identical")
+
+
+@cli.command()
+@click.argument("mission")
+@click.option("--trials", type=click.IntRange(min=1), required=True, help="Trials per parameter combination.")
+@click.option("--seed", "base_seed", type=int, default=0, show_default=True, help="Seed of trial 0 (trial i: seed + i).")
+@_set_option
+@click.option("--vary", multiple=True, metavar="KEY=V1,V2", help="Values to compare (cartesian product of all --vary).")
+@click.option("--workers", type=click.IntRange(min=1), help="Parallel trials (default: CPU count).")
+@click.option("--backend", type=click.Choice(["local", "ray"]), default="local", show_default=True)
+@click.option("--address", help="Ray cluster address (default: start a local Ray inside --out).")
+@click.option("--out", type=click.Path(file_okay=False), default="campaign", show_default=True)
+@click.option("--until", type=float, help="Time limit of each trial (simulated s).")
+@click.option("--logs", type=click.Choice(["failed", "all", "none"]), default="failed", show_default=True,
+              help="Which trials keep their MCAP log.")
+def campaign(mission: str, trials: int, base_seed: int, sets: tuple[str, ...], vary: tuple[str, ...],
+             workers: int | None, backend: str, address: str | None, out: str, until: float | None, logs: str) -> None:
+    """Run independent seeded trials of MISSION in parallel; write trials.json/.csv and summary.json in --out."""
+    from .campaign import run_campaign
+
+    try:
+        with bad_input():
+            varied = {k: v.split(",") for k, v in _assignments(vary, "--vary").items()}
+            summary = run_campaign(
+                mission, trials, out, base_seed, _assignments(sets, "--set"), varied, workers, backend, address,
+                until, logs,
+            )
+    except KeyboardInterrupt:
+        _err.print("campaign interrupted: no summary written")
+        sys.exit(130)
+    table = Table(title=f"campaign {mission} -> {out}", title_justify="left")
+    for column in ("params", "trials", "success", "95% CI", "median sim time", "outcomes"):
+        table.add_column(column)
+    for group in summary["groups"] or [{"params": {}, **summary}]:
+        low, high = group["success_rate_ci95"]
+        table.add_row(
+            ", ".join(f"{k}={v}" for k, v in group["params"].items()) or "all",
+            str(group["trials"]),
+            f"{group['success_rate']:.0%}",
+            f"[{low:.0%}, {high:.0%}]",
+            f"{group['median_sim_time']:.1f} s",
+            ", ".join(f"{k} {n}" for k, n in group["outcomes"].items()),
+        )
+    Console().print(table)
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Console-script entry point (``marsupial``)."""
+    cli.main(args=argv, prog_name="marsupial")

@@ -1,0 +1,141 @@
+"""Where skills and conditions come from: entry points, and the mission's ``plugins:`` pins.
+
+Every installed distribution registers its nodes under the entry-point
+groups ``marsupial.skills`` and ``marsupial.conditions`` (``name =
+"pkg.module:Class"``); marsupial registers its own the same way in its
+``pyproject.toml``. A mission may pin the implementation of a name
+(``plugins: {hover: my_pkg.nodes:Hover}``); a name offered by two
+distributions without a pin is an error naming both providers.
+
+Lookup failures raise :class:`~marsupial.trees.errors.MissionError` without
+a location; the compiler re-raises them at the node's file:line.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import lru_cache
+from importlib.metadata import entry_points
+
+from .errors import MissionError, one_of, suggest
+from .skill import Condition, MissionNode, Skill
+
+#: node kind -> (entry-point group, base class)
+GROUPS: dict[str, tuple[str, type[MissionNode]]] = {
+    "skill": ("marsupial.skills", Skill),
+    "condition": ("marsupial.conditions", Condition),
+}
+
+
+@dataclass(frozen=True)
+class Provider:
+    """One implementation of a node name: ``"pkg.mod:Class"`` and the distribution offering it."""
+
+    name: str
+    target: str
+    distribution: str
+
+    def __str__(self) -> str:
+        return f"{self.distribution} ({self.target})"
+
+
+@lru_cache(maxsize=None)
+def installed(kind: str) -> dict[str, tuple[Provider, ...]]:
+    """Installed providers of skills (``kind="skill"``) or conditions, by name (cached per process)."""
+    group = GROUPS[kind][0]
+    found: dict[str, list[Provider]] = {}
+    for ep in entry_points(group=group):
+        dist = ep.dist.name if ep.dist is not None else "?"
+        provider = Provider(ep.name, ep.value, dist)
+        providers = found.setdefault(ep.name, [])
+        if provider not in providers:  # one distribution seen twice on sys.path
+            providers.append(provider)
+    return {name: tuple(p) for name, p in sorted(found.items())}
+
+
+def import_target(target: str) -> type:
+    """Import ``"pkg.module:Class"``; a :class:`MissionError` says what failed."""
+    module_name, sep, attr = target.partition(":")
+    if not sep or not module_name or not attr:
+        raise MissionError(f"'{target}' is not an import target", expected="'package.module:Class'")
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as err:
+        raise MissionError(f"cannot import module '{module_name}' of '{target}': {err}") from None
+    obj = module
+    for part in attr.split("."):
+        try:
+            obj = getattr(obj, part)
+        except AttributeError:
+            known = [n for n in dir(module) if not n.startswith("_")]
+            raise MissionError(
+                f"module '{module_name}' has no '{attr}'", suggestion=suggest(attr, known)
+            ) from None
+    return obj  # type: ignore[return-value]
+
+
+class Registry:
+    """Resolves node names to classes for one mission (its ``plugins:`` pins applied).
+
+    Args:
+        pins: ``{name: "pkg.mod:Class"}`` from the mission's ``plugins:``.
+    """
+
+    def __init__(self, pins: Mapping[str, str] | None = None):
+        self.pins = dict(pins or {})
+
+    def names(self, kind: str) -> list[str]:
+        """Known names of ``kind`` (``"skill"`` or ``"condition"``), pinned ones included."""
+        base = GROUPS[kind][1]
+        pinned = [n for n, t in self.pins.items() if self._pinned_is(t, base)]
+        return sorted(set(installed(kind)) | set(pinned))
+
+    def providers(self, kind: str, name: str) -> tuple[Provider, ...]:
+        """Installed providers of ``name``."""
+        return installed(kind).get(name, ())
+
+    def resolve(self, kind: str, name: str) -> type[MissionNode]:
+        """The class implementing node ``name`` of ``kind``; MissionError if unknown or ambiguous."""
+        group, base = GROUPS[kind]
+        if name in self.pins:
+            cls = import_target(self.pins[name])
+            if not (isinstance(cls, type) and issubclass(cls, base)):
+                raise MissionError(
+                    f"plugin '{self.pins[name]}' pinned for {kind} '{name}' is not a {base.__name__}",
+                    expected=f"a subclass of marsupial.trees.skill.{base.__name__}",
+                )
+            return cls
+        providers = self.providers(kind, name)
+        if not providers:
+            known = self.names(kind)
+            raise MissionError(
+                f"unknown {kind} '{name}'", expected=one_of(known), suggestion=suggest(name, known)
+            )
+        if len(providers) > 1:
+            listed = " and ".join(str(p) for p in providers)
+            raise MissionError(
+                f"{kind} '{name}' is provided by {listed}",
+                expected=f"one provider; pin one with 'plugins: {{{name}: <package.module:Class>}}'",
+            )
+        cls = import_target(providers[0].target)
+        if not (isinstance(cls, type) and issubclass(cls, base)):
+            raise MissionError(f"entry point '{name}' of group {group} ({providers[0]}) is not a {base.__name__}")
+        return cls
+
+    def skill(self, name: str) -> type[Skill]:
+        """The skill class called ``name``."""
+        return self.resolve("skill", name)  # type: ignore[return-value]
+
+    def condition(self, name: str) -> type[Condition]:
+        """The condition class called ``name``."""
+        return self.resolve("condition", name)  # type: ignore[return-value]
+
+    @staticmethod
+    def _pinned_is(target: str, base: type) -> bool:
+        try:
+            cls = import_target(target)
+        except MissionError:
+            return False
+        return isinstance(cls, type) and issubclass(cls, base)

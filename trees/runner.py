@@ -1,0 +1,403 @@
+"""Run a mission: build its world and team, compile its tree, tick it in simulated time, record it.
+
+:func:`run_mission` is what ``marsupial run`` calls. One tick of the loop, at
+simulated time ``t`` (ticks every ``1 / run.tick_hz`` s):
+
+1. robot poses are recorded every :data:`POSE_PERIOD` (battery levels once
+   per simulated second);
+2. the operator channel delivers the commands due by ``t``: ``abort`` ends
+   the run (outcome ``aborted``), ``pause`` makes every robot safe and stops
+   ticking the tree until ``resume``; other commands are latched for the
+   ``operator`` conditions;
+3. unless paused, the arbiter starts a new tick and the tree is ticked once;
+   its status snapshot goes to the log;
+4. the run ends when the root succeeds or fails, or at the time limit
+   (``--until`` / ``run.until``: outcome ``time_limit``);
+5. the world advances to the next tick.
+
+Outcomes and exit codes: ``success`` 0; ``failure``, ``aborted``,
+``time_limit``, ``error`` (an exception in a skill) 1; ``interrupted``
+(SIGINT) 130; ``terminated`` (SIGTERM) 143. Bad input raises
+:class:`~marsupial.trees.errors.MissionError` before any log is created.
+The log is a valid MCAP however the run ends.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import signal
+import sys
+import threading
+import time
+import traceback
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import FrameType
+from typing import Any
+
+import py_trees
+from py_trees.common import Status
+from rich.console import Console
+from rich.live import Live
+from rich.table import Table
+from rich.text import Text
+
+from marsupial.world import World
+from marsupial.world.disturbances import apply_disturbances
+from marsupial.world.errors import UnknownNameError, WorldError
+
+from .compiler import CompiledTree, compile_mission
+from .errors import MissionError, one_of, suggest
+from .mission import Mission, load_mission
+from .operator import CONTROL_COMMANDS, OperatorChannel
+from .recorder import Recorder, Terminated
+from .skill import RunContext
+
+#: outcome -> process exit code
+EXIT_CODES = {"success": 0, "interrupted": 130, "terminated": 143}
+METRIC_PERIOD = 1.0  # s of simulated time between battery samples
+POSE_PERIOD = 0.2  # s of simulated time between recorded robot poses (5 Hz keeps the log's cost low)
+
+
+@dataclass
+class RunResult:
+    """How a run ended.
+
+    Attributes:
+        mission: mission name.
+        outcome: success, failure, aborted, time_limit, error, interrupted or terminated.
+        seed: the world seed used.
+        sim_time: simulated time at the end (s).
+        ticks: tree ticks done.
+        wall_time: wall-clock duration of the loop (s; for speed reports only).
+        metrics: last value of every metric (``name`` or ``name[labels]``).
+        robots: final state of each robot (position m, battery state of charge).
+        log_path: the MCAP file, if one was written.
+        message: the error text for outcome ``error``.
+    """
+
+    mission: str
+    outcome: str
+    seed: int
+    sim_time: float
+    ticks: int
+    wall_time: float
+    metrics: dict[str, float] = field(default_factory=dict)
+    robots: dict[str, dict[str, Any]] = field(default_factory=dict)
+    log_path: Path | None = None
+    message: str = ""
+
+    @property
+    def exit_code(self) -> int:
+        """0 success, 130 SIGINT, 143 SIGTERM, else 1."""
+        return EXIT_CODES.get(self.outcome, 1)
+
+    @property
+    def real_time_factor(self) -> float:
+        """Simulated seconds per wall-clock second."""
+        return self.sim_time / self.wall_time if self.wall_time > 0 else float("inf")
+
+
+# ------------------------------------------------------------------ world
+def build_world(mission: Mission, seed: int, gui: bool = False) -> World:
+    """The mission's world: scene, team robots (poses, sensors, options, storage), disturbances.
+
+    Bad names or values raise :class:`MissionError` at the mission key that holds them.
+    """
+    spec = mission.spec
+    try:
+        world = World(scene=spec.world.scene, seed=seed, gui=gui)
+    except WorldError as err:
+        raise _located(mission, ("world", "scene"), err) from None
+    try:
+        for name, member in spec.team.items():
+            options: dict[str, Any] = dict(member.options)
+            if member.pose is not None:
+                options["pose"] = member.pose
+            if member.sensors:
+                options["sensors"] = member.sensors
+            try:
+                world.add_robot(member.robot, name, **options)
+            except (WorldError, TypeError, ValueError) as err:
+                raise _located(mission, ("team", name), err) from None
+        for name, member in spec.team.items():
+            if member.stored_on is not None:
+                carrier = world.robot(member.stored_on)
+                store = getattr(carrier, "store", None)
+                if store is None:
+                    raise mission.error_at(
+                        ("team", name, "stored_on"),
+                        f"'{member.stored_on}' (a {carrier.kind}) cannot carry robots",
+                        expected="a carrier robot with a storage (e.g. mobile_manipulator)",
+                    )
+                try:
+                    store(world.robot(name))
+                except (WorldError, ValueError) as err:
+                    raise _located(mission, ("team", name, "stored_on"), err) from None
+        if spec.world.disturbances:
+            try:
+                apply_disturbances(world, spec.world.disturbances, where="world.disturbances")
+            except WorldError as err:
+                raise _located(mission, ("world", "disturbances"), err) from None
+    except BaseException:
+        world.close()
+        raise
+    return world
+
+
+def _located(mission: Mission, key_path: tuple, err: Exception) -> MissionError:
+    if isinstance(err, UnknownNameError):
+        return mission.error_at(key_path, f"unknown {err.kind} '{err.name}'", one_of(err.known), suggest(err.name, err.known))
+    return mission.error_at(key_path, str(err))
+
+
+# ------------------------------------------------------------------ signals
+@contextlib.contextmanager
+def _signals_end_the_run(recorder: Recorder | None) -> Iterator[None]:
+    """SIGINT -> KeyboardInterrupt, SIGTERM -> Terminated, the log closed first (main thread only)."""
+    if recorder is not None:
+        recorder.install_signal_handlers()  # restored when the recorder closes
+        yield
+        return
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def on_signal(signum: int, frame: FrameType | None) -> None:
+        raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+
+    saved = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for signum, handler in saved.items():
+            signal.signal(signum, handler)
+
+
+# ------------------------------------------------------------------ progress
+def battery_of(robot: Any) -> float | None:
+    """State of charge (0..1) of a robot's battery, ``None`` if it has none."""
+    battery = getattr(robot, "battery", None)
+    return None if battery is None else float(battery.soc)
+
+
+class _Progress:
+    """The live progress line (sim time, RTF, active skill and battery per robot); off when not a TTY."""
+
+    def __init__(self, console: Console, enabled: bool):
+        self.console = console
+        self.live: Live | None = None
+        if enabled and console.is_terminal:
+            self.live = Live(Text(""), console=console, refresh_per_second=8, transient=True)
+            self.live.start()
+        self._last = 0.0
+
+    def update(self, world: World, tree: CompiledTree, wall: float, paused: bool) -> None:
+        if self.live is None or time.perf_counter() - self._last < 0.1:
+            return
+        self._last = time.perf_counter()
+        active = tree.active_skills()
+        parts = [f"t {world.now:7.1f} s", f"RTF {world.now / wall if wall > 0 else 0:5.1f}x"]
+        if paused:
+            parts.append("PAUSED")
+        for name, robot in world.robots.items():
+            skills = ", ".join(s.name for s in active.get(name, ())) or "idle"
+            soc = battery_of(robot)
+            parts.append(f"{name}: {skills}" + (f" {soc:.0%}" if soc is not None else ""))
+        self.live.update(Text(" | ".join(parts)))
+
+    def stop(self) -> None:
+        if self.live is not None:
+            self.live.stop()
+
+
+def summary_table(result: RunResult) -> Table:
+    """The end-of-run summary: outcome, times, speed, log, robots and metrics."""
+    table = Table(title=f"mission {result.mission}", show_header=False, title_justify="left")
+    table.add_column("", style="bold")
+    table.add_column("")
+    style = "green" if result.outcome == "success" else "red"
+    table.add_row("outcome", Text(result.outcome, style=style))
+    table.add_row("seed", str(result.seed))
+    table.add_row("sim time", f"{result.sim_time:.2f} s ({result.ticks} ticks)")
+    table.add_row("wall time", f"{result.wall_time:.2f} s (RTF {result.real_time_factor:.1f}x)")
+    if result.log_path is not None:
+        table.add_row("log", Text(str(result.log_path)))
+    for name, state in result.robots.items():
+        text = "position [" + ", ".join(f"{v:.2f}" for v in state["position"]) + "] m"
+        if state.get("battery") is not None:
+            text += f", battery {state['battery']:.1%}"
+        table.add_row(Text(name), Text(text))
+    for name, value in sorted(result.metrics.items()):
+        table.add_row(Text(name), f"{value:.4g}")
+    if result.message:
+        table.add_row("error", Text(result.message.strip().splitlines()[-1], style="red"))
+    return table
+
+
+# ------------------------------------------------------------------ running
+def _metadata(mission: Mission, seed: int, until: float | None) -> dict[str, Any]:
+    return {
+        "mission": mission.text,
+        "mission_name": mission.name,
+        "mission_path": str(mission.path) if mission.path is not None else "",
+        "seed": seed,
+        "overrides": json.dumps(mission.overrides),
+        "until": json.dumps(until),
+    }
+
+
+def run_mission(
+    mission: Mission | str | Path,
+    seed: int | None = None,
+    log_path: str | Path | None = None,
+    until: float | None = None,
+    gui: bool = False,
+    progress: bool = True,
+    operator_stdin: bool = False,
+    overrides: Mapping[str, str] | None = None,
+    record_images: bool = False,
+    operator: OperatorChannel | None = None,
+    console: Console | None = None,
+) -> RunResult:
+    """Run ``mission`` (a :class:`Mission`, or a name/path loaded with ``overrides``) to its end.
+
+    Args:
+        seed: world seed (default: the mission's ``world.seed``).
+        log_path: MCAP file to write (none: no log).
+        until: time limit in simulated seconds (default: the mission's ``run.until``).
+        gui: open the pybullet GUI and pace the run to real time.
+        progress: show the live progress line (TTY only) and print the summary table.
+        operator_stdin: read operator commands from stdin (one per line: ``command [reason]``)
+            and pace the run to real time so that they can be typed.
+        record_images: record camera frames that skills log (``Recorder.log_image``).
+        operator: the operator channel to use (default: one with the mission's timeline);
+            its :meth:`~OperatorChannel.say` is the Python API for live commands.
+        console: where progress and the summary go (default: stdout).
+
+    Raises :class:`MissionError` for bad input, before the log file is created.
+    """
+    if not isinstance(mission, Mission):
+        mission = load_mission(mission, overrides)
+    spec = mission.spec
+    seed = spec.world.seed if seed is None else int(seed)
+    until = spec.run.until if until is None else float(until)
+    channel = operator if operator is not None else OperatorChannel((e.at, e.say, e.why) for e in spec.operator)
+    console = console or Console()
+
+    py_trees.blackboard.Blackboard.clear()
+    context = RunContext(operator=channel)
+    tree = compile_mission(mission, context)  # bad input fails here, before world and log exist
+    world = build_world(mission, seed, gui)
+    context.world = world
+    if operator_stdin:
+        channel.read_from(sys.stdin)
+
+    log = Path(log_path) if log_path is not None else None
+    if log is not None:
+        log.parent.mkdir(parents=True, exist_ok=True)
+    recorder = Recorder(log, _metadata(mission, seed, until), record_images=record_images) if log else None
+    context.recorder = recorder
+    display = _Progress(console, progress)
+    outcome, message, ticks = "failure", "", 0
+    started = time.perf_counter()
+    try:
+        with recorder if recorder is not None else contextlib.nullcontext(), _signals_end_the_run(recorder):
+            outcome, ticks = _loop(mission, tree, context, until, gui or operator_stdin, display, started)
+            if tree.root.status == Status.RUNNING:
+                tree.root.stop(Status.INVALID)  # skills still running leave their robots safe
+            context.event("run_end", outcome=outcome, sim_time=world.now, ticks=ticks)
+    except KeyboardInterrupt:
+        outcome = "interrupted"
+    except Terminated:
+        outcome = "terminated"
+    except Exception as err:  # a skill raised: the log records it (Recorder.__exit__) and the run fails
+        outcome, message = "error", f"{type(err).__name__}: {err}\n{traceback.format_exc()}"
+    finally:
+        display.stop()
+    result = RunResult(
+        mission=mission.name,
+        outcome=outcome,
+        seed=seed,
+        sim_time=world.now,
+        ticks=ticks,
+        wall_time=time.perf_counter() - started,
+        metrics=dict(context.metrics),
+        robots={n: {"position": r.pose()[0].tolist(), "battery": battery_of(r)} for n, r in world.robots.items()},
+        log_path=log,
+        message=message,
+    )
+    world.close()
+    if progress:
+        console.print(summary_table(result))
+    return result
+
+
+def _loop(
+    mission: Mission,
+    tree: CompiledTree,
+    context: RunContext,
+    until: float | None,
+    real_time: bool,
+    display: _Progress,
+    started: float,
+) -> tuple[str, int]:
+    """Tick until the root finishes, the time limit or an abort; returns (outcome, ticks).
+
+    ``real_time`` paces the loop to the wall clock (GUI or live operator: a
+    person watches or types); the simulation itself never reads the clock.
+    """
+    world = context.world
+    assert world is not None
+    recorder, channel, arbiter = context.recorder, context.operator, context.arbiter
+    assert channel is not None
+    period = 1.0 / mission.spec.run.tick_hz
+    context.event("run_start", mission=mission.name, seed=world.seed, tick_hz=mission.spec.run.tick_hz, until=until)
+    if recorder is not None:
+        recorder.log_scene(world)
+    next_metric = next_pose = 0.0
+    paused = False
+    ticks = 0
+    while True:
+        now = world.now
+        if recorder is not None and now + 1e-9 >= next_pose:
+            next_pose += POSE_PERIOD
+            recorder.log_robot_poses(now, {n: r.pose() for n, r in world.robots.items()})
+        if now + 1e-9 >= next_metric:
+            next_metric += METRIC_PERIOD
+            for name, robot in world.robots.items():
+                soc = battery_of(robot)
+                if soc is not None:
+                    context.metric("battery_soc", soc, robot=name)
+        for command in channel.poll(now):
+            context.event("operator", command=command.say, source=command.source, why=command.why)
+            if command.say not in CONTROL_COMMANDS and command.say not in tree.listens and recorder is not None:
+                recorder.log_text(now, "warning", f"no node listens to operator command '{command.say}'")
+            if command.say == "abort":
+                return "aborted", ticks
+            if command.say == "pause" and not paused:
+                paused = True
+                arbiter.new_tick()
+                for robot in world.robots.values():
+                    arbiter.safe_stop(robot, "operator", "operator")
+                context.event("state_change", state="paused")
+            elif command.say == "resume" and paused:
+                paused = False
+                context.event("state_change", state="running")
+        if not paused:
+            arbiter.new_tick()
+            tree.root.tick_once()
+            ticks += 1
+            if recorder is not None:
+                recorder.log_tree(now, tree.root)
+            if tree.root.status in (Status.SUCCESS, Status.FAILURE):
+                return ("success" if tree.root.status == Status.SUCCESS else "failure"), ticks
+        if until is not None and now + 1e-9 >= until:
+            return "time_limit", ticks
+        world.step(period)
+        wall = time.perf_counter() - started
+        if real_time and world.now > wall:
+            time.sleep(world.now - wall)
+        display.update(world, tree, wall, paused)

@@ -1,0 +1,280 @@
+"""Base classes of mission nodes: skills (act) and conditions (test).
+
+A mission node is a py_trees behaviour with three declared parts, checked
+when the mission is compiled:
+
+* ``Params`` — a pydantic model of typed, documented parameters (attribute
+  docstrings are the docs; defaults are the papers' values);
+* ``reads`` / ``writes`` — the blackboard keys it uses, formatted with the
+  node's ``robot`` and its parameters (``"{robot}/coverage"``, ``"{key}"``);
+* ``robot_kinds`` — the robot kinds it accepts (``None``: any kind; set
+  ``uses_robot = False`` for nodes that take no robot, like ``wait``).
+
+A :class:`Skill`'s life cycle maps onto py_trees': :meth:`Skill.start`
+(``initialise``), :meth:`Skill.step` (``update``, returns a status and sets
+``self.feedback_message``) and :meth:`Skill.finish` (``terminate``, on
+SUCCESS, FAILURE or INVALID = preempted or stopped by its parent). The
+default ``finish`` leaves the robot safe through the arbiter
+(``robot.safe_stop()`` unless the preempting node already commands the
+robot in this tick). ``finish`` is named so because py_trees' own
+``stop()`` does the tree's bookkeeping and must not be overridden. Every
+start is recorded as a ``state_change`` event (status RUNNING) and every end
+as an ``outcome`` event (SUCCESS, FAILURE or INVALID, with the last
+feedback message). A :class:`Condition`
+implements :meth:`Condition.check` and never returns RUNNING.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import py_trees
+from py_trees.common import Access, Status
+from pydantic import BaseModel, ConfigDict
+
+from .arbitration import Arbiter, CommandPort, Stamp
+
+if TYPE_CHECKING:
+    from marsupial.world import World
+
+    from .operator import OperatorChannel
+
+
+_STATUSES = frozenset(Status)
+
+
+class NodeParams(BaseModel):
+    """Base of every node's ``Params``: unknown keys are errors, attribute docstrings are the docs."""
+
+    model_config = ConfigDict(extra="forbid", use_attribute_docstrings=True, frozen=True)
+
+
+@dataclass
+class RunContext:
+    """What the nodes of one run share: the world, the arbiter, the operator channel, the recorder.
+
+    ``world`` is ``None`` when a tree is compiled only to be drawn or
+    exported. Events and metrics go to the recorder (if any) stamped with
+    the world's simulated time; the last value of every metric is kept in
+    :attr:`metrics` for the run's result.
+    """
+
+    world: World | None = None
+    arbiter: Arbiter = field(default_factory=Arbiter)
+    operator: OperatorChannel | None = None
+    recorder: Any = None
+    metrics: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def now(self) -> float:
+        """Simulated time (s) of the world (0 without a world)."""
+        return self.world.now if self.world is not None else 0.0
+
+    def event(self, kind: str, **fields: Any) -> None:
+        """Record an event of ``kind`` (``preemption``, ``operator``, …) at the current sim time."""
+        if self.recorder is not None:
+            self.recorder.log_event(self.now, kind, **fields)
+
+    def metric(self, name: str, value: float, **labels: Any) -> None:
+        """Record metric ``name`` = ``value`` at the current sim time and keep its last value.
+
+        The last value is kept under ``name`` or, with labels, ``name[v1,v2]``
+        (label values in the order given), e.g. ``battery_soc[uav]``.
+        """
+        key = f"{name}[{','.join(str(v) for v in labels.values())}]" if labels else name
+        self.metrics[key] = float(value)
+        if self.recorder is not None:
+            self.recorder.log_metric(self.now, name, float(value), **labels)
+
+    def image(self, camera: str, rgb: Any, **options: Any) -> None:
+        """Record a camera frame (``Recorder.log_image``) when the run records images (``--record-images``)."""
+        if self.recorder is not None:
+            self.recorder.log_image(self.now, camera, rgb, **options)
+
+
+class MissionNode(py_trees.behaviour.Behaviour):
+    """Base of skills and conditions: parameters, blackboard ports, the robot it acts on.
+
+    Subclasses are built by the compiler as ``cls(name, params, context, robot)``.
+    """
+
+    class Params(NodeParams):
+        """No parameters."""
+
+    #: blackboard keys read / written, formatted with ``robot`` and the parameters
+    reads: ClassVar[tuple[str, ...]] = ()
+    writes: ClassVar[tuple[str, ...]] = ()
+    #: robot kinds accepted (``None``: any kind); ignored when ``uses_robot`` is False
+    robot_kinds: ClassVar[tuple[str, ...] | None] = None
+    #: whether the node acts on / observes one team robot
+    uses_robot: ClassVar[bool] = True
+
+    def __init__(self, name: str, params: NodeParams | None = None, context: RunContext | None = None, robot: str | None = None):
+        super().__init__(name)
+        self.params = params if params is not None else self.Params()
+        self.context = context if context is not None else RunContext()
+        self.robot_name = robot
+        #: registry name of the node (``"goto"``, ``"battery_below"``); set by the compiler
+        self.kind: str = type(self).__name__.lower()
+        self._port: CommandPort | None = None
+        self.blackboard = self.attach_blackboard_client(name=name)
+        for key in self.read_keys(self.params, robot):
+            self.blackboard.register_key(key, access=Access.READ)
+        for key in self.write_keys(self.params, robot):
+            self.blackboard.register_key(key, access=Access.WRITE)
+
+    # --------------------------------------------------------- declarations
+    @classmethod
+    def _format_keys(cls, keys: tuple[str, ...], params: NodeParams, robot: str | None) -> tuple[str, ...]:
+        values = {**params.model_dump(), "robot": robot}
+        return tuple(key.format(**values) for key in keys)
+
+    @classmethod
+    def read_keys(cls, params: NodeParams, robot: str | None) -> tuple[str, ...]:
+        """Blackboard keys this node reads, for these parameters and robot."""
+        return cls._format_keys(cls.reads, params, robot)
+
+    @classmethod
+    def write_keys(cls, params: NodeParams, robot: str | None) -> tuple[str, ...]:
+        """Blackboard keys this node writes, for these parameters and robot."""
+        return cls._format_keys(cls.writes, params, robot)
+
+    @classmethod
+    def summary(cls) -> str:
+        """First line of the class docstring (used by ``marsupial skills``)."""
+        return (cls.__doc__ or "").strip().splitlines()[0] if cls.__doc__ else ""
+
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """py_trees' ``Behaviour.tick`` without its per-tick debug logging and status-list building.
+
+        Same semantics (initialise when not RUNNING, update, stop on a final
+        status); leaves are most of a tree, so this keeps large trees fast.
+        """
+        if self.status != Status.RUNNING:
+            self.initialise()
+        new_status = self.update()
+        if new_status not in _STATUSES:
+            self.logger.error(f"A behaviour returned an invalid status, setting to INVALID [{new_status}][{self.name}]")
+            new_status = Status.INVALID
+        if new_status != Status.RUNNING:
+            self.stop(new_status)
+        self.status = new_status
+        yield self
+
+    # -------------------------------------------------------------- access
+    @property
+    def world(self) -> World:
+        """The run's :class:`~marsupial.world.World`."""
+        if self.context.world is None:
+            raise RuntimeError(f"node '{self.name}' was compiled without a world and cannot run")
+        return self.context.world
+
+    @property
+    def robot(self) -> CommandPort:
+        """The team robot this node acts on, seen through the arbiter (reads pass through)."""
+        if self._port is None:
+            if self.robot_name is None:
+                raise RuntimeError(f"node '{self.name}' has no robot")
+            self._port = CommandPort(self.world.robot(self.robot_name), self.context.arbiter, self.id, self.name)
+        return self._port
+
+    def read(self, key: str, default: Any = None) -> Any:
+        """Blackboard value of a declared read key, ``default`` while nothing wrote it."""
+        try:
+            return self.blackboard.get(key)
+        except KeyError:
+            return default
+
+    def write(self, key: str, value: Any) -> None:
+        """Set a declared write key on the blackboard."""
+        self.blackboard.set(key, value, overwrite=True)
+
+
+class Skill(MissionNode):
+    """Base of skills: override :meth:`start`, :meth:`step` and, if needed, :meth:`finish`.
+
+    ``self.robot`` sends arbitrated commands; :attr:`stopped_by` tells, after
+    :meth:`leave_safe`, whether the safe-stop was applied (``None``) or
+    which node's command in the same tick kept the robot.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any):
+        super().__init__(*args, **kwargs)
+        self._active = False
+        self.stopped_by: Stamp | None = None
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "stop" in cls.__dict__:
+            raise TypeError(
+                f"{cls.__name__} overrides stop(): override finish(status) instead "
+                "(py_trees' stop() does the tree's bookkeeping)"
+            )
+
+    # ---------------------------------------------------------- life cycle
+    def start(self) -> None:
+        """Acquire the robot and reset state (called when the skill starts running)."""
+
+    def step(self) -> Status:
+        """One tick: read state, send one command, return RUNNING/SUCCESS/FAILURE."""
+        raise NotImplementedError(f"{type(self).__name__} must implement step()")
+
+    def finish(self, status: Status) -> None:
+        """Called once when the skill ends with ``status`` (INVALID: preempted); leaves the robot safe."""
+        self.leave_safe()
+
+    def leave_safe(self) -> None:
+        """Arbitrated ``safe_stop`` of the skill's robot (a no-op for skills without a robot)."""
+        if self.uses_robot and self.robot_name is not None:
+            self.stopped_by = self.robot.safe_stop()
+
+    # ------------------------------------------------------ py_trees hooks
+    def initialise(self) -> None:
+        self._active = True
+        self.stopped_by = None
+        self.feedback_message = ""
+        self.context.event("state_change", node=self.name, skill=self.kind, robot=self.robot_name, status="RUNNING")
+        self.start()
+
+    def update(self) -> Status:
+        return self.step()
+
+    def terminate(self, new_status: Status) -> None:
+        if self._active:  # py_trees may stop a finished node again with INVALID: finish once
+            self._active = False
+            self.finish(new_status)
+            self.context.event(
+                "outcome", node=self.name, skill=self.kind, robot=self.robot_name,
+                status=new_status.name, message=self.feedback_message,
+            )
+
+
+class Condition(MissionNode):
+    """Base of conditions: implement :meth:`check`; the node is SUCCESS when it holds, else FAILURE.
+
+    ``primary`` names the parameter given as the value of the compact guard
+    form (``{battery_below: 0.2, robot: uav}`` sets ``threshold``).
+    """
+
+    primary: ClassVar[str | None] = None
+    btcpp_kind: ClassVar[str] = "Condition"  # BehaviorTree.CPP export (trees/btxml.py)
+
+    def check(self) -> bool:
+        """Whether the condition holds now."""
+        raise NotImplementedError(f"{type(self).__name__} must implement check()")
+
+    def describe(self) -> str:
+        """Human-readable text of this guard (used as the reason of a preemption)."""
+        args = []
+        if self.primary is not None:
+            args.append(str(getattr(self.params, self.primary)))
+        if self.robot_name is not None:
+            args.append(f"robot={self.robot_name}")
+        return f"{self.kind}({', '.join(args)})"
+
+    def update(self) -> Status:
+        holds = self.check()
+        self.feedback_message = "holds" if holds else "does not hold"
+        return Status.SUCCESS if holds else Status.FAILURE
