@@ -1,0 +1,13 @@
+"""UAV takeoff, tracking and landing on a moving platform (Palafox et al. 2019).
+
+Algorithms, numpy in and out:
+
+- :mod:`.detection` — the red landing platform in a downward camera frame
+  (Algorithm 1, §3.2): HSV red mask, Gaussian blur, Canny, Hough lines,
+  polygon fitting, centroid from first-order moments, inverse pinhole with Z
+  from the sonar, frames discarded beyond an IMU tilt threshold.
+- :mod:`.prediction` — constant-velocity Kalman filter of the platform in the
+  world frame and its prediction over the path time (§3.3.2).
+- :mod:`.control` — height-adaptive PI (§3.3.1) and the platform tracker that
+  feeds it the measured (reactive) or predicted (predictive) platform position.
+"""
