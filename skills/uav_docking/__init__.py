@@ -1,0 +1,13 @@
+"""VTOL-UAV docking on a mobile manipulator (Narváez et al., 2020): the algorithms of the Motion Engine.
+
+Plain functions and classes with numpy in and out, all in the manipulator
+frame M (``arm_base`` of the carrier), metres and radians:
+
+- :mod:`.pose` — AprilTag bundle detection, bundle pose by one solvePnP over
+  every visible tag, and the UAV pose in M by eq. (1);
+- :mod:`.cord` — the switching-regression cord (Algorithm 1, eqs. 2–6);
+- :mod:`.vicinity` — the vicinity of ellipse sections around the cord (eqs. 7–8);
+- :mod:`.zones` — the local map of obstacles and prohibited zones, the cord
+  repair that keeps the vicinity free (Fig. 9), and the random-sample validation;
+- :mod:`.ik_engine` — the IK engine over random end-effector poses (Algorithm 3).
+"""
