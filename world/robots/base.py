@@ -40,6 +40,11 @@ def pose_from_list(pose: Sequence[float], default_z: float = 0.0) -> tuple[np.nd
     return np.array([x, y, z]), np.array([0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)])
 
 
+def rotation_matrix(quaternion: Sequence[float]) -> np.ndarray:
+    """3×3 rotation matrix of an ``[x, y, z, w]`` quaternion."""
+    return np.array(pybullet.getMatrixFromQuaternion(quaternion)).reshape(3, 3)
+
+
 def yaw_of(quaternion: Sequence[float]) -> float:
     """Heading (rad) about world z of an ``[x, y, z, w]`` quaternion."""
     x, y, z, w = quaternion
@@ -123,6 +128,14 @@ class Robot:
             self.body_id, index, computeForwardKinematics=True, physicsClientId=self.cid
         )
         return np.array(state[4]), np.array(state[5])
+
+    def mounted_frame(
+        self, link: str | int, offset: np.ndarray, R_link_frame: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """World position (m) and rotation of a frame fixed to ``link`` at ``offset`` with ``R_link_frame``."""
+        p_link, q_link = self.link_pose(link)
+        R_world_link = rotation_matrix(q_link)
+        return p_link + R_world_link @ offset, R_world_link @ R_link_frame
 
     def sensor(self, name: str) -> Sensor:
         """The sensor called ``name`` (full ``"<robot>/<sensor>"`` or short name); the error lists this robot's sensors."""

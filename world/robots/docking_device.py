@@ -41,6 +41,7 @@ import numpy as np
 import pybullet
 
 from .attachment import place_link_at, set_collisions, weld
+from .base import rotation_matrix
 
 if TYPE_CHECKING:
     from .base import Robot
@@ -53,10 +54,6 @@ LOCK_TIME = 0.3  # s of simulated time for the micro servo to close the levers (
 LATERAL_TOLERANCE = 0.015  # m: Part B centre off Part A's axis still guided by the conical structure
 TILT_TOLERANCE = math.radians(15.0)  # rad: roll/pitch between the parts the cone absorbs (§IV-C)
 LOCK_FORCE = 2000.0  # N: strength of the locked joint
-
-
-def _rotation(quaternion: Any) -> np.ndarray:
-    return np.array(pybullet.getMatrixFromQuaternion(quaternion)).reshape(3, 3)
 
 
 class DockingDevice:
@@ -132,12 +129,12 @@ class DockingDevice:
     def part_a_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """World position (m) and rotation matrix of Part A's frame (z = approach direction)."""
         p, q = self.carrier.link_pose(self.link)
-        return p, _rotation(q)
+        return p, rotation_matrix(q)
 
     def part_b_pose(self, uav: Robot) -> tuple[np.ndarray, np.ndarray]:
         """World position (m) and rotation matrix of ``uav``'s Part B frame."""
         p, q = uav.link_pose("part_b")
-        return p, _rotation(q)
+        return p, rotation_matrix(q)
 
     def distance_to(self, uav: Robot) -> float:
         """Distance (m) between the centres of Part A's and ``uav``'s Part B mating faces."""

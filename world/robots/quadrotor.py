@@ -66,7 +66,7 @@ from ..sensors.camera import OPTICAL_DOWN, OPTICAL_FORWARD, Camera, Intrinsics
 from ..sensors.imu import Imu
 from ..sensors.sonar import Sonar
 from ..world import GRAVITY
-from .base import Robot, pose_from_list
+from .base import Robot, pose_from_list, rotation_matrix
 
 if TYPE_CHECKING:
     from ..world import World
@@ -342,7 +342,7 @@ class Quadrotor(Robot):
     def _link_com_in_base(self, link: int) -> np.ndarray:
         state = pybullet.getLinkState(self.body_id, link, computeForwardKinematics=True, physicsClientId=self.cid)
         p_base, q_base = pybullet.getBasePositionAndOrientation(self.body_id, physicsClientId=self.cid)
-        R = np.array(pybullet.getMatrixFromQuaternion(q_base)).reshape(3, 3)
+        R = rotation_matrix(q_base)
         return R.T @ (np.array(state[0]) - np.array(p_base))
 
     def _add_sensors(self, overrides: dict[str, dict[str, Any]]) -> None:

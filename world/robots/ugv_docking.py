@@ -47,7 +47,7 @@ import pybullet
 from ..sensors.base import SensorConfig
 from ..sensors.camera import OPTICAL_FORWARD, Camera, Intrinsics
 from .attachment import place_link_at, weld
-from .base import yaw_of
+from .base import rotation_matrix, yaw_of
 from .diff_drive import DiffDriveLimits
 from .wheeled import WheeledRobot
 
@@ -120,7 +120,7 @@ class ChildUGV(WheeledRobot):
     def footprint_corners(self) -> np.ndarray:
         """The four corners of the footprint rectangle in the world frame, ``(4, 3)`` (m)."""
         p, q = self.footprint_pose()
-        R = np.array(pybullet.getMatrixFromQuaternion(q)).reshape(3, 3)
+        R = rotation_matrix(q)
         half_l, half_w = self.size[0] / 2, self.size[1] / 2
         local = np.array(
             [[half_l, half_w, 0.0], [half_l, -half_w, 0.0], [-half_l, -half_w, 0.0], [-half_l, half_w, 0.0]]
@@ -238,7 +238,7 @@ class MotherUGV(WheeledRobot):
         the entrance width across, and the footprint within 2 cm of the plate's top.
         """
         p_plate, q = self.platform_pose()
-        R = np.array(pybullet.getMatrixFromQuaternion(q)).reshape(3, 3)
+        R = rotation_matrix(q)
         corners = (child.footprint_corners() - p_plate) @ R  # in the platform frame
         return bool(
             np.all(np.abs(corners[:, 0]) <= self.plate_size[0] / 2)

@@ -141,9 +141,7 @@ class Camera(Sensor[CameraFrame]):
 
     def optical_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """Position (m) and ``R_world_optical`` of the optical frame now."""
-        p_link, q_link = self.robot.link_pose(self.link)
-        R_world_link = np.array(pybullet.getMatrixFromQuaternion(q_link)).reshape(3, 3)
-        return p_link + R_world_link @ self.offset, R_world_link @ self.R_link_optical
+        return self.robot.mounted_frame(self.link, self.offset, self.R_link_optical)
 
     def measure(self) -> CameraFrame:
         """Render the view now; fill the floor analytically; add seeded noise."""

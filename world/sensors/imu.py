@@ -11,8 +11,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
-import pybullet
 
+from ..robots.base import rotation_matrix
 from ..world import GRAVITY
 from .base import Sensor, SensorConfig
 
@@ -58,7 +58,7 @@ class Imu(Sensor[ImuData]):
 
     def measure(self) -> ImuData:
         _, q_world_body = self.robot.pose()
-        R_world_body = np.array(pybullet.getMatrixFromQuaternion(q_world_body)).reshape(3, 3)
+        R_world_body = rotation_matrix(q_world_body)
         a_world = self.robot.acceleration() + np.array([0.0, 0.0, GRAVITY])
         omega_world = self.robot.velocity()[1]
         f_body = R_world_body.T @ a_world

@@ -130,9 +130,7 @@ class Lidar(Sensor[LidarScan]):
 
     def sensor_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """Position (m) and ``R_world_sensor`` of the sensor frame now."""
-        p_link, q_link = self.robot.link_pose(self.link)
-        R_world_link = np.array(pybullet.getMatrixFromQuaternion(q_link)).reshape(3, 3)
-        return p_link + R_world_link @ self.offset, R_world_link @ self.R_link_sensor
+        return self.robot.mounted_frame(self.link, self.offset, self.R_link_sensor)
 
     def measure(self) -> LidarScan:
         """Cast every beam now, see through the own robot, add seeded noise and lost echoes."""
