@@ -103,17 +103,13 @@ def root_of(tree: Behaviour | py_trees.trees.BehaviourTree) -> Behaviour:
 
 def walk(tree: Behaviour | py_trees.trees.BehaviourTree) -> list[Behaviour]:
     """Every node of ``tree`` in depth-first pre-order; node ``i`` of the list has uid ``i + 1``."""
-    root = root_of(tree)
-    nodes = [root]
-    append = nodes.append
-
-    def visit(node: Behaviour) -> None:
-        for child in node.children:
-            append(child)
-            if child.children:
-                visit(child)
-
-    visit(root)
+    nodes = []
+    stack = [root_of(tree)]
+    while stack:  # iterative: this runs after every tick of a run
+        node = stack.pop()
+        nodes.append(node)
+        if node.children:
+            stack.extend(reversed(node.children))
     return nodes
 
 

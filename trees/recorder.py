@@ -391,9 +391,9 @@ def _metadata_text(value: Any) -> str:
 class _TreeTrack:
     """The tree the recorder follows: which nodes, and their statuses at the last snapshot."""
 
-    def __init__(self, key: tuple[int, ...]):
-        self.key = key  # identity of every node, in uid order: a new key is a new structure
-        self.statuses = [py_trees.common.Status.INVALID] * len(key)
+    def __init__(self, nodes: list[py_trees.behaviour.Behaviour]):
+        self.nodes = nodes  # every node in uid order: another list (by identity) is another structure
+        self.statuses = [py_trees.common.Status.INVALID] * len(nodes)
 
 
 # ---------------------------------------------------------------- recorder
@@ -699,11 +699,10 @@ class Recorder:
         if self._closed:
             return False
         nodes = walk(tree)
-        key = tuple(map(id, nodes))
         track = self._tree
-        fresh = track is None or track.key != key
+        fresh = track is None or track.nodes != nodes  # list equality compares nodes by identity
         if fresh:
-            track = _TreeTrack(key)
+            track = _TreeTrack(nodes)
         assert track is not None
         statuses = [node.status for node in nodes]
         if not fresh and statuses == track.statuses:
