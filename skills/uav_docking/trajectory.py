@@ -1,0 +1,117 @@
+"""Joint trajectories toward the selected pose, time-parameterised by toppra (Narváez et al., §IV-A-3, §V-B).
+
+P_R becomes joint goal angles by IK; the arm then moves along the straight
+line from the present joint set-point to them in joint space, timed by
+TOPP-RA (``toppra``) under the 15 rpm joint speed limit of the Dynamixel
+arm (§V-B) and a joint acceleration limit, and starting with the present
+set-point speed so that successive trajectories (one per selection, at
+f_O) join without a stop. The joint PIDs track the sampled set-point.
+
+Limits: the speed limit is the arm's (``JOINT_SPEED_LIMIT``, 15 rpm =
+1.571 rad/s). The paper gives no acceleration limit: 10 rad/s² reaches
+15 rpm in 0.16 s, within the joints' stall torques even for the arm
+stretched horizontally with a 0.5 kg UAV at the tip (joint 2: 1.35 kg·m²
+and 18.5 N·m of gravity from the pinocchio model, so 32 of its 44.7 N·m).
+toppra runs on 101 gridpoints with the constant-acceleration
+parametrizer, which honours both limits between gridpoints, each slightly
+reduced (``margin``) against rounding.
+
+Units: rad, rad/s, rad/s², seconds.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+import numpy as np
+import toppra
+import toppra.algorithm
+import toppra.constraint
+
+from marsupial.world.robots.mobile_manipulator import JOINT_SPEED_LIMIT
+
+logging.getLogger("toppra").setLevel(logging.WARNING)  # toppra logs every parametrisation at INFO
+
+
+@dataclass(frozen=True)
+class TrajectoryParams:
+    """Joint limits of the time parameterisation.
+
+    Attributes:
+        v_max: joint speed limit (rad/s): 15 rpm, §V-B.
+        a_max: joint acceleration limit (rad/s², chosen: 15 rpm in 0.16 s).
+        margin: fraction of both limits handed to toppra.
+        gridpoints: toppra gridpoints over the path parameter s ∈ [0, 1].
+    """
+
+    v_max: float = JOINT_SPEED_LIMIT
+    a_max: float = 10.0
+    margin: float = 0.98
+    gridpoints: int = 101
+
+    def __post_init__(self) -> None:
+        if self.v_max <= 0 or self.a_max <= 0 or not 0 < self.margin <= 1 or self.gridpoints < 2:
+            raise ValueError(f"TrajectoryParams needs v_max, a_max > 0, 0 < margin <= 1, gridpoints >= 2; got {self}")
+
+
+class JointTrajectory:
+    """A time-parameterised joint motion q(t), t ≥ 0 from its start; held at the goal after ``duration``.
+
+    Attributes:
+        q_start, q_goal: end points (rad); duration: time to reach the goal (s).
+    """
+
+    def __init__(
+        self, q_start: np.ndarray, q_goal: np.ndarray, timed: toppra.interpolator.AbstractGeometricPath | None
+    ):
+        self.q_start = np.asarray(q_start, dtype=float).copy()
+        self.q_goal = np.asarray(q_goal, dtype=float).copy()
+        self._timed = timed
+        self.duration = 0.0 if timed is None else float(timed.duration)
+
+    def sample(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """Joint angles (rad) and speeds (rad/s) ``t`` seconds after the start."""
+        if self._timed is None or t >= self.duration:
+            return self.q_goal.copy(), np.zeros_like(self.q_goal)
+        t = max(0.0, t)
+        return np.asarray(self._timed(t), dtype=float), np.asarray(self._timed(t, 1), dtype=float)
+
+
+def plan_joint_trajectory(
+    q_start: np.ndarray,
+    q_goal: np.ndarray,
+    qd_start: np.ndarray | None = None,
+    params: TrajectoryParams = TrajectoryParams(),
+) -> JointTrajectory:
+    """The time-optimal motion along the joint-space line from ``q_start`` to ``q_goal`` (rad), at rest at the goal.
+
+    ``qd_start`` (rad/s) is the present set-point speed: its component along
+    the line is kept as the start speed where the limits allow it (else the
+    motion starts from rest).
+    """
+    q_start, q_goal = np.asarray(q_start, dtype=float), np.asarray(q_goal, dtype=float)
+    if q_start.shape != q_goal.shape or q_start.ndim != 1:
+        raise ValueError(f"expected two joint vectors of one shape, got {q_start.shape} and {q_goal.shape}")
+    delta = q_goal - q_start
+    if np.max(np.abs(delta)) < 1e-9:
+        return JointTrajectory(q_start, q_goal, None)
+    dof = q_start.size
+    v, a = params.margin * params.v_max, params.margin * params.a_max
+    path = toppra.SplineInterpolator([0.0, 1.0], np.vstack((q_start, q_goal)))  # q(s) = q_start + s·Δq
+    constraints = [
+        toppra.constraint.JointVelocityConstraint(np.column_stack((np.full(dof, -v), np.full(dof, v)))),
+        toppra.constraint.JointAccelerationConstraint(np.column_stack((np.full(dof, -a), np.full(dof, a)))),
+    ]
+    instance = toppra.algorithm.TOPPRA(
+        constraints, path, gridpoints=np.linspace(0.0, 1.0, params.gridpoints), parametrizer="ParametrizeConstAccel"
+    )
+    sd_start = 0.0
+    if qd_start is not None:  # ṡ of the present speed along Δq, within the speed limit
+        sd_start = float(np.clip(np.dot(qd_start, delta) / np.dot(delta, delta), 0.0, v / np.max(np.abs(delta))))
+    timed = instance.compute_trajectory(sd_start, 0.0)
+    if timed is None and sd_start > 0.0:  # too fast to stop in time on this line: start from rest
+        timed = instance.compute_trajectory(0.0, 0.0)
+    if timed is None:
+        raise RuntimeError(f"toppra found no parameterisation from {q_start} to {q_goal}")
+    return JointTrajectory(q_start, q_goal, timed)
