@@ -40,9 +40,12 @@ Flight model (pybullet forces, every physics step, plain ``math``):
 
 Docking: a docking device rigidly attaches the vehicle, then calls
 :meth:`Quadrotor.on_docked` (motors off, charging if on a charger); while
-docked the vehicle applies no force. :meth:`Quadrotor.on_released` hands the
-vehicle back: if the motors were switched on meanwhile it hovers where it was
-released, otherwise it falls.
+docked the vehicle applies no force unless its motors are started (armed):
+then the rotors spin up and their thrust rises to the vehicle's weight in
+``ROTOR_SPIN_UP_S`` (the dock carries the rest, the battery pays for it and
+does not charge), so a deploying carrier can release it once the thrust
+holds. :meth:`Quadrotor.on_released` hands the vehicle back: if the motors
+were switched on meanwhile it hovers where it was released, otherwise it falls.
 
 Frames: world z-up; base frame x forward, y left, z up; positions m,
 velocities m/s, angles rad.
@@ -72,6 +75,7 @@ if TYPE_CHECKING:
     from ..world import World
 
 FRAMES = ("body", "world")
+ROTOR_SPIN_UP_S = 0.5  # s for the rotors of a vehicle armed on a dock to reach hover thrust (chosen)
 VERTICAL_REFERENCE_TAU = 0.1  # s, smoothing of the vertical velocity reference
 
 
@@ -392,7 +396,8 @@ class Quadrotor(Robot):
     def set_motors(self, on: bool) -> None:
         """Start or stop the motors. Starting holds the current pose; stopped motors give no thrust and draw nothing.
 
-        While docked the motors may be started (armed) to hover on release.
+        While docked the motors may be started (armed): the rotors spin up to hover
+        thrust (:attr:`thrust`) and the vehicle hovers when released.
         An empty battery cannot start them.
         """
         on = bool(on) and not self.battery.empty
@@ -435,7 +440,7 @@ class Quadrotor(Robot):
     @property
     def charging(self) -> bool:
         """True while docked on a charger and the battery is not full."""
-        return self._docked and self._on_charger and self.battery.soc < 1.0
+        return self._docked and self._on_charger and not self._motors and self.battery.soc < 1.0
 
     @property
     def limits(self) -> FlightLimits:
@@ -494,7 +499,7 @@ class Quadrotor(Robot):
         flying = self._motors and not self._docked
         self._phase -= 1
         if self._phase > 0:  # between autopilot updates: the motors hold the last thrust and torque
-            if flying:
+            if self._motors:  # flying, or armed on a dock and spinning up
                 self._apply(self._force_body, self._torque_world)
                 self.battery.draw(self.power, dt)
             elif self._docked and self._on_charger:
@@ -504,6 +509,11 @@ class Quadrotor(Robot):
         cid, body = self.cid, self.body_id
         v, w_world = pybullet.getBaseVelocity(body, physicsClientId=cid)
         self._v_sample, self._v_sample_step = v, self._clock.steps
+        if self._motors and self._docked:
+            self._spin_up(dt * self._period)
+            self._apply(self._force_body, self._torque_world)
+            self.battery.draw(self.power, dt)
+            return
         if not flying:
             self.thrust = self.power = 0.0
             if self._docked and self._on_charger:
@@ -514,6 +524,16 @@ class Quadrotor(Robot):
         self._autopilot(v, w_world, dt * self._period)
         self._apply(self._force_body, self._torque_world)
         self.battery.draw(self.power, dt)
+
+    def _spin_up(self, dt: float) -> None:
+        """Armed on a dock: the thrust (body z) rises towards the weight at weight / ``ROTOR_SPIN_UP_S`` (N/s)."""
+        weight = self.mass * GRAVITY
+        self.thrust = min(weight, self.thrust + weight * dt / ROTOR_SPIN_UP_S)
+        self.power = self._power_model.power(self.thrust, 0.0, 0.0)
+        self._force_body = (0.0, 0.0, self.thrust)
+        self._torque_world = (0.0, 0.0, 0.0)
+        if self.battery.empty:
+            self.set_motors(False)
 
     def _apply(self, force_body: tuple[float, float, float], torque_world: tuple[float, float, float]) -> None:
         """Apply the rotor force (body frame, at the composite centre of mass) and the attitude torque (world frame)."""

@@ -1,0 +1,304 @@
+"""Coverage of the rooms around the team by the exploring UAV: flight map, what has been seen, where to go next.
+
+Plain numpy/OpenCV on a plan-view grid of the scene (world x, y; ``cell`` m):
+
+- :class:`FlightMap` — the scene's obstacles at the flight height (every
+  object whose vertical extent meets the flight band), grown by the UAV's
+  clearance; the cells of the area to survey (scene zones with the given
+  tags — rooms, hall, corridor — or every cell when the scene has none).
+  The building map is known in outline, as the paper allows ("in some cases,
+  a building map is available", §V-A).
+- :func:`visible_cells` — the cells the front camera surveys from one frame:
+  the horizontal range profile of its depth image (the row looking level)
+  bounds a visibility fan, so walls hide what is behind them.
+- :func:`geodesic` — Dijkstra distances and parents over free cells inside
+  an allowed mask (the D_team disc around the carrier).
+- :func:`shortcut` — straight-line pruning of a grid path over free cells.
+- :func:`next_goal` — frontier-like choice: the reachable cell maximising
+  the unsurveyed target cells around it, discounted by its path length.
+- :func:`target_in_view` — whether an object is in a camera frame and not
+  hidden (geometric check against the depth image).
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from marsupial.world.robots.base import rotation_matrix
+
+_NEIGHBOURS = [(-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)]
+
+
+@dataclass
+class FlightMap:
+    """Plan-view grid at the flight height; cell ``[i, j]`` is centred at ``lo + ((i, j) + ½) cell`` (world x, y).
+
+    Attributes:
+        lo: world x, y (m) of the grid's corner; cell: cell side (m).
+        blocked: obstacles grown by the UAV's clearance (bool ``(nx, ny)``).
+        area: cells of the area to survey (bool ``(nx, ny)``).
+    """
+
+    lo: np.ndarray
+    cell: float
+    blocked: np.ndarray
+    area: np.ndarray
+
+    @classmethod
+    def from_scene(
+        cls,
+        scene,
+        height: float,
+        band: float,
+        clearance: float,
+        area_tags: Iterable[str],
+        cell: float = 0.25,
+        extent: tuple[np.ndarray, np.ndarray] | None = None,
+    ) -> FlightMap:
+        """The map of ``scene`` for flight at ``height`` ± ``band`` (m), obstacles grown by ``clearance`` (m).
+
+        The grid spans the scene's size (centred on the origin), its objects
+        and zones, and ``extent`` (``(lo, hi)`` world x, y) if given.
+        """
+        lows = [-0.5 * np.asarray(scene.size, dtype=float)]
+        highs = [0.5 * np.asarray(scene.size, dtype=float)]
+        if extent is not None:
+            lows.append(np.asarray(extent[0], dtype=float))
+            highs.append(np.asarray(extent[1], dtype=float))
+        footprints = []
+        for obj in scene.objects.values():
+            corners = _box_corners(obj.position, obj.orientation, obj.size)
+            lows.append(corners[:, :2].min(axis=0))
+            highs.append(corners[:, :2].max(axis=0))
+            if corners[:, 2].min() <= height + band and corners[:, 2].max() >= height - band:
+                footprints.append(cv2.convexHull(corners[:, :2].astype(np.float32)).reshape(-1, 2))
+        for zone in scene.zones.values():
+            lows.append(np.asarray(zone.lo[:2]))
+            highs.append(np.asarray(zone.hi[:2]))
+        lo = np.min(lows, axis=0) - clearance - cell
+        hi = np.max(highs, axis=0) + clearance + cell
+        shape = tuple(np.ceil((hi - lo) / cell).astype(int))
+        occupied = np.zeros(shape, dtype=np.uint8)
+        for polygon in footprints:  # OpenCV draws (x = column, y = row): rows are our i (world x)
+            points = np.round((polygon - lo) / cell - 0.5).astype(np.int32)[:, ::-1]
+            cv2.fillConvexPoly(occupied, points, 1)
+        radius = int(math.ceil(clearance / cell))
+        kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius + 1, 2 * radius + 1))
+        blocked = cv2.dilate(occupied, kernel).astype(bool)
+        grid = cls(lo, cell, blocked, np.zeros(shape, dtype=bool))
+        tags = set(area_tags)
+        zones = [z for z in scene.zones.values() if tags & set(z.tags)]
+        if zones:
+            x, y = grid.centers()
+            for zone in zones:
+                grid.area |= (x >= zone.lo[0]) & (x <= zone.hi[0]) & (y >= zone.lo[1]) & (y <= zone.hi[1])
+        else:
+            grid.area[:] = True
+        grid.area &= ~blocked
+        return grid
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """Cells along x and y."""
+        return self.blocked.shape
+
+    def centers(self) -> tuple[np.ndarray, np.ndarray]:
+        """World x and y (m) of every cell centre, each ``(nx, ny)``."""
+        i, j = np.indices(self.shape)
+        return self.lo[0] + (i + 0.5) * self.cell, self.lo[1] + (j + 0.5) * self.cell
+
+    def index(self, xy: np.ndarray) -> tuple[int, int]:
+        """Cell ``(i, j)`` of a world point (clipped to the grid)."""
+        ij = np.floor((np.asarray(xy[:2]) - self.lo) / self.cell).astype(int)
+        return int(np.clip(ij[0], 0, self.shape[0] - 1)), int(np.clip(ij[1], 0, self.shape[1] - 1))
+
+    def point(self, ij: tuple[int, int]) -> np.ndarray:
+        """World x, y (m) of a cell centre."""
+        return self.lo + (np.asarray(ij, dtype=float) + 0.5) * self.cell
+
+    def disc(self, center_xy: np.ndarray, radius: float) -> np.ndarray:
+        """Cells whose centre is within ``radius`` m of ``center_xy`` (bool grid)."""
+        x, y = self.centers()
+        return (x - center_xy[0]) ** 2 + (y - center_xy[1]) ** 2 <= radius**2
+
+    def nearest_free(self, xy: np.ndarray, allowed: np.ndarray) -> tuple[int, int] | None:
+        """The free allowed cell nearest to ``xy`` (``None`` if there is none)."""
+        candidates = np.argwhere(allowed & ~self.blocked)
+        if len(candidates) == 0:
+            return None
+        here = np.asarray(self.index(xy))
+        k = int(np.argmin(np.sum((candidates - here) ** 2, axis=1)))
+        return int(candidates[k, 0]), int(candidates[k, 1])
+
+    def line_free(self, a: tuple[int, int], b: tuple[int, int]) -> bool:
+        """True when the straight segment between two cell centres crosses no blocked cell."""
+        n = max(abs(b[0] - a[0]), abs(b[1] - a[1])) * 2 + 1
+        i = np.round(np.linspace(a[0], b[0], n)).astype(int)
+        j = np.round(np.linspace(a[1], b[1], n)).astype(int)
+        return not self.blocked[i, j].any()
+
+
+def _box_corners(position, orientation, size) -> np.ndarray:
+    """The 8 corners (m, world) of an object's box (a cylinder's or sphere's bounding box)."""
+    half = 0.5 * np.asarray(size, dtype=float)
+    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
+    return np.asarray(position) + (signs * half) @ rotation_matrix(orientation).T
+
+
+def geodesic(grid: FlightMap, start: tuple[int, int], allowed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Dijkstra path lengths (m; ``inf`` unreachable) from ``start`` over free ``allowed`` cells, 8-connected.
+
+    Returns the distances and, per cell, the flat index of its parent (−1: none).
+    """
+    passable = allowed & ~grid.blocked
+    nx, ny = grid.shape
+    distance = np.full(grid.shape, np.inf)
+    parent = np.full(grid.shape, -1, dtype=np.int64)
+    distance[start] = 0.0
+    queue = [(0.0, start[0], start[1])]
+    steps = [(di, dj, grid.cell * math.hypot(di, dj)) for di, dj in _NEIGHBOURS]
+    while queue:
+        d, i, j = heapq.heappop(queue)
+        if d > distance[i, j]:
+            continue
+        for di, dj, length in steps:
+            a, b = i + di, j + dj
+            if 0 <= a < nx and 0 <= b < ny and passable[a, b] and d + length < distance[a, b]:
+                if di and dj and not (passable[i, b] and passable[a, j]):
+                    continue  # no corner cutting between two blocked cells
+                distance[a, b] = d + length
+                parent[a, b] = i * ny + j
+                heapq.heappush(queue, (d + length, a, b))
+    return distance, parent
+
+
+def grid_path(grid: FlightMap, parent: np.ndarray, goal: tuple[int, int]) -> list[tuple[int, int]]:
+    """Cells from the Dijkstra start to ``goal`` following ``parent`` (start first)."""
+    ny = grid.shape[1]
+    path = [goal]
+    while parent[path[-1]] >= 0:
+        k = int(parent[path[-1]])
+        path.append((k // ny, k % ny))
+    return path[::-1]
+
+
+def shortcut(grid: FlightMap, path: list[tuple[int, int]]) -> list[tuple[int, int]]:
+    """The path's cells kept only where a straight free segment cannot skip them (greedy string pulling)."""
+    if len(path) <= 2:
+        return list(path)
+    kept = [path[0]]
+    k = 0
+    while k < len(path) - 1:
+        far = len(path) - 1
+        while far > k + 1 and not grid.line_free(path[k], path[far]):
+            far -= 1
+        kept.append(path[far])
+        k = far
+    return kept
+
+
+def truncate(points: np.ndarray, length: float) -> np.ndarray:
+    """The polyline ``(n, 2)`` cut at arc length ``length`` (m) (the whole polyline if shorter)."""
+    out = [points[0]]
+    left = length
+    for a, b in zip(points[:-1], points[1:]):
+        segment = float(np.linalg.norm(b - a))
+        if segment >= left:
+            out.append(a + (b - a) * (left / segment if segment > 0 else 0.0))
+            return np.asarray(out)
+        out.append(b)
+        left -= segment
+    return np.asarray(out)
+
+
+def visible_cells(
+    grid: FlightMap, origin_xy: np.ndarray, bearings: np.ndarray, ranges: np.ndarray, view_range: float
+) -> np.ndarray:
+    """Cells inside the visibility fan of one frame (bool grid).
+
+    ``bearings`` (rad, world, increasing) and ``ranges`` (m, horizontal free
+    range along each) sample the camera's level view; a cell is seen when its
+    bearing lies within the fan and it is no farther than the range of the
+    nearest sampled bearing (and ``view_range``).
+    """
+    x, y = grid.centers()
+    dx, dy = x - origin_xy[0], y - origin_xy[1]
+    distance = np.hypot(dx, dy)
+    centre = 0.5 * (bearings[0] + bearings[-1])
+    relative = np.remainder(np.arctan2(dy, dx) - centre + math.pi, math.tau) - math.pi
+    half = 0.5 * (bearings[-1] - bearings[0])
+    inside = (np.abs(relative) <= half) & (distance <= view_range)
+    k = np.clip(np.searchsorted(bearings - centre, relative), 0, len(bearings) - 1)
+    return inside & (distance <= np.minimum(ranges[k], view_range) + 0.5 * grid.cell)
+
+
+def level_ranges(depth: np.ndarray, K: np.ndarray, R_world_optical: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Bearings (rad, world, increasing) and horizontal free ranges (m) of a camera's level view.
+
+    The image row whose ray at the principal point is horizontal (clamped to
+    the image) gives, per column, the depth along the optical axis; the
+    nearest of it and the rows next to it, converted to the distance along
+    each column's ray, is the free range.
+    """
+    h, w = depth.shape
+    fx, fy, cx, cy = K[0, 0], K[1, 1], K[0, 2], K[1, 2]
+    r_z = R_world_optical[2]  # world z of the optical axes
+    row = cy if abs(r_z[1]) < 1e-9 else cy - fy * r_z[2] / r_z[1]
+    row = int(np.clip(round(row), 1, h - 2))
+    z = depth[row - 1 : row + 2].min(axis=0)
+    u = np.arange(w)
+    rays_opt = np.stack(((u - cx) / fx, np.full(w, (row - cy) / fy), np.ones(w)))
+    rays = R_world_optical @ rays_opt  # world, z = 1 along the optical axis
+    ranges = z * np.hypot(rays[0], rays[1])
+    bearings = np.arctan2(rays[1], rays[0])
+    order = np.argsort(np.unwrap(bearings))
+    return np.unwrap(bearings)[order], ranges[order]
+
+
+def next_goal(
+    grid: FlightMap,
+    distance: np.ndarray,
+    unseen_target: np.ndarray,
+    look_radius: float,
+    decay_length: float,
+    excluded: np.ndarray,
+) -> tuple[int, int] | None:
+    """The reachable cell with most unsurveyed target cells within ``look_radius`` m, discounted by its distance.
+
+    Utility = count · exp(−path length / ``decay_length``); cells in
+    ``excluded`` (near earlier stops) and unreachable ones are skipped.
+    ``None`` when no reachable cell has anything left to survey around it.
+    """
+    r = max(1, int(round(look_radius / grid.cell)))
+    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1)).astype(np.float32)
+    gain = cv2.filter2D(unseen_target.astype(np.float32), -1, kernel, borderType=cv2.BORDER_CONSTANT)
+    utility = np.where(np.isfinite(distance) & ~excluded, gain * np.exp(-distance / decay_length), 0.0)
+    if utility.max() <= 0.5:
+        return None
+    k = int(np.argmax(utility))
+    return k // grid.shape[1], k % grid.shape[1]
+
+
+def target_in_view(
+    depth: np.ndarray, K: np.ndarray, position: np.ndarray, R_world_optical: np.ndarray, points: np.ndarray, max_range: float
+) -> bool:
+    """True when one of ``points`` (m, world) projects into the image within ``max_range`` and is not hidden.
+
+    A point counts as unhidden when the depth image there is no nearer than
+    the point's own depth minus 0.3 m (the object's surface in front of it).
+    """
+    h, w = depth.shape
+    p_opt = (np.asarray(points) - position) @ R_world_optical  # rows: points in the optical frame
+    for x, y, z in p_opt:
+        if z <= 0.05 or math.sqrt(x * x + y * y + z * z) > max_range:
+            continue
+        u, v = K[0, 0] * x / z + K[0, 2], K[1, 1] * y / z + K[1, 2]
+        if 0 <= u < w and 0 <= v < h and depth[int(v), int(u)] >= z - 0.3:
+            return True
+    return False

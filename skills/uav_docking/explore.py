@@ -1,0 +1,354 @@
+"""Aerial exploration around the carrier (Narváez §II, §V-A): survey, stop every D_e to sweep the yaw, stay within D_team.
+
+§V-A: "the aerial robot performs a series of movements to explore different
+building areas. It tries to follow a path γ_UAV that allows covering the
+available zones ... every D_e distance, the UAV stops and performs yaw
+variations to make detailed measurements of the scene in a static
+position", and it never flies "farther than a radius distance D_team
+measured from the ground robot, which is a safety measure considering that
+D_team can be traveled and a docking process can be executed with less than
+20% of UAV energy". The paper gives no values for D_e and D_team; they are
+chosen here (see the parameters).
+
+Behaviour (one state per phase, one velocity command per tick):
+
+- ``climb`` — motors on, climb to the cruise height;
+- ``plan`` — choose the next goal (:func:`~.coverage.next_goal` over the
+  flight map, among reachable cells within the leash disc, less the blending
+  zone, of the carrier both now and where its velocity takes it by the end
+  of the next sweep, so that the UAV leads a moving carrier), plan a grid path to it (:func:`~.coverage.geodesic`,
+  :func:`~.coverage.shortcut`) and cut it at D_e (the next stop); nothing
+  left to survey: fly back near the carrier and plan again later;
+- ``fly`` — follow the path at ``speed``, braking onto the stop point (the
+  distance flown in this phase is what D_e counts);
+- ``sweep`` — hover and turn the heading through ``sweep_angle``.
+
+Hard constraint (every phase): the horizontal distance to the carrier is
+held below D_team − ``leash_margin`` (reduced for the height difference, so
+the 3-D distance stays below D_team). Over the last metre inside that limit
+the exploring command blends into a catch-up flight along the free path to
+the carrier, faster than the carrier; at the limit the UAV only catches up
+(phase ``catch_up``, a sweep is abandoned) until it is well inside again.
+Goals are only chosen inside the limit.
+
+Coverage (blackboard ``coverage_key``, read by ``area_explored``): the share
+of the survey area's cells — zones tagged ``area_tags`` within the D_team
+disc of the carrier and reachable inside it — seen by the front camera
+(:func:`~.coverage.visible_cells`, its level depth row). The target is found
+when the scene object ``target`` shows in a front-camera frame within
+``target_range`` and not hidden (:func:`~.coverage.target_in_view`); then
+``target_found`` is written and, with ``stop_at_target``, the skill succeeds.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from py_trees.common import Status
+from pydantic import Field
+
+from marsupial.trees.skill import NodeParams, Skill
+from marsupial.world.robots.base import yaw_of
+
+from .coverage import (
+    FlightMap,
+    geodesic,
+    grid_path,
+    level_ranges,
+    next_goal,
+    shortcut,
+    target_in_view,
+    truncate,
+    visible_cells,
+)
+from .team import carrier_port, phase_event
+
+D_E = 2.0  # m, D_e (§V-A): chosen — a stop per room-sized step; the front camera surveys ~4 m around each stop
+SOFT_ZONE = 1.0  # m inside the leash radius over which exploring blends into catching up with the carrier
+D_TEAM = 6.0  # m, D_team (§V-A): chosen — a room's reach indoors; flying it back and docking takes < 1 % of the
+#                2700 mAh battery (≈ 6 s + 25 s at 85 W), far below the paper's 20 % bound
+
+
+class Explore(Skill):
+    """Survey the rooms around the carrier with the UAV, stopping every D_e for a yaw sweep, within D_team of the carrier."""
+
+    class Params(NodeParams):
+        carrier: str = "carrier"
+        """Team member the UAV must stay near (the ground robot of §V-A)."""
+        D_e: float = Field(D_E, gt=0.0)
+        """D_e (§V-A): distance flown between stops for a yaw sweep (m; chosen: 2 m)."""
+        D_team: float = Field(D_TEAM, gt=0.0)
+        """D_team (§V-A): largest distance from the carrier (m; chosen: 6 m, see module notes)."""
+        height: float = Field(1.5, gt=0.0)
+        """Cruise height above the floor (m; chosen: below the 2.1 m door lintels, above furniture and the arm)."""
+        speed: float = Field(1.0, gt=0.0, le=4.0)
+        """Cruise speed (m/s; ≤ 4 m/s lateral limit, §V-B)."""
+        sweep_angle: float = Field(math.tau, gt=0.0)
+        """Heading change of each yaw sweep (rad)."""
+        sweep_rate: float = Field(1.2, gt=0.0, le=math.radians(100.0))
+        """Yaw rate of the sweeps (rad/s; ≤ 100°/s autopilot limit)."""
+        view_range: float = Field(4.0, gt=0.0)
+        """Range (m) within which the front camera's view counts as surveyed."""
+        view_period: float = Field(0.5, gt=0.0)
+        """Time between front-camera frames used for coverage and the target (s)."""
+        area_tags: tuple[str, ...] = ("room", "hall", "corridor")
+        """Scene zone tags of the area to survey (every cell when the scene has no such zone)."""
+        cell: float = Field(0.25, gt=0.0)
+        """Side of the flight map's cells (m)."""
+        clearance: float = Field(0.45, gt=0.0)
+        """Distance (m) kept from obstacles by the planned paths (UAV half-span 0.2 m + margin)."""
+        leash_margin: float = Field(0.5, ge=0.0)
+        """Distance (m) inside D_team at which the UAV is held (room for the carrier's acceleration)."""
+        coverage_key: str = "coverage"
+        """Blackboard key of the surveyed fraction (0..1), read by ``area_explored``."""
+        target: str | None = "target"
+        """Scene object searched for (none: no target search)."""
+        target_range: float = Field(6.0, gt=0.0)
+        """Farthest distance (m) at which the target is recognised in a front-camera frame."""
+        target_key: str = "target_found"
+        """Blackboard key set to True when the target is found."""
+        stop_at_target: bool = True
+        """Succeed when the target is found (else keep exploring)."""
+
+    robot_kinds = ("Quadrotor",)
+    writes = ("{coverage_key}", "{target_key}")
+
+    # ------------------------------------------------------------ life cycle
+    def start(self) -> None:
+        p = self.params
+        self.carrier = carrier_port(self, p.carrier)
+        self.camera = self.robot.sensor("front_camera")
+        scene = self.world.scene
+        here = np.asarray(self.robot.pose()[0][:2])
+        extent = (here - p.D_team, here + p.D_team)
+        self.map = FlightMap.from_scene(scene, p.height, 0.5, p.clearance, p.area_tags, p.cell, extent)
+        self.seen = np.zeros(self.map.shape, dtype=bool)
+        self.target_points = self.target_points_of(scene)
+        self.found = False
+        self.stops: list[np.ndarray] = []
+        self.phase = "climb"
+        self.waypoints = np.zeros((0, 2))
+        self.flown = 0.0
+        self.last_xy = here
+        self.heading_turned = 0.0
+        self.last_yaw = yaw_of(self.robot.pose()[1])
+        self.next_view = self.world.now
+        self.replan_at = math.inf
+        self.catch_up_until = -math.inf
+        self.catch_up_direction = np.zeros(2)
+        if not self.robot.motors_on and not self.robot.docked:
+            self.robot.set_motors(True)
+
+    def target_points_of(self, scene) -> np.ndarray:
+        """Centre and top-face centre (m, world) of the target object; none without a target."""
+        if self.params.target is None:
+            return np.zeros((0, 3))
+        obj = scene.object(self.params.target)
+        centre = np.asarray(obj.position, dtype=float)
+        return np.array([centre, centre + [0.0, 0.0, 0.5 * obj.size[2]]])
+
+    def step(self) -> Status:
+        p = self.params
+        if self.robot.docked:
+            self.feedback_message = f"{self.robot_name} is docked: deploy it before exploring"
+            return Status.FAILURE
+        position, orientation = self.robot.pose()
+        xy, yaw = np.asarray(position[:2]), yaw_of(orientation)
+        if self.phase == "fly":  # exploration flight only: drift while sweeping or catching up does not count
+            self.flown += float(np.linalg.norm(xy - self.last_xy))
+        self.heading_turned += abs(math.remainder(yaw - self.last_yaw, math.tau))
+        self.last_xy, self.last_yaw = xy, yaw
+        carrier_xy = np.asarray(self.carrier.pose()[0][:2])
+        radius = self.leash_radius(position[2])
+        if self.world.now + 1e-9 >= self.next_view:
+            self.next_view = self.world.now + p.view_period
+            self.look()
+            if self.found and p.stop_at_target:
+                self.feedback_message = "target found"
+                return Status.SUCCESS
+
+        v_xy, vz, yaw_rate = self.phase_command(xy, position[2], yaw, carrier_xy, radius)
+        v_xy = self.leash(v_xy, xy, carrier_xy, radius)
+        if self.phase == "catch_up":
+            yaw_rate = self.face(v_xy, yaw)
+        self.robot.command_velocity(v_xy[0], v_xy[1], vz, yaw_rate, frame="world")
+        return Status.RUNNING
+
+    # ------------------------------------------------------------- phases
+    def face(self, v_xy: np.ndarray, yaw: float) -> float:
+        """Yaw rate (rad/s) turning the front camera toward the direction of flight."""
+        if float(np.linalg.norm(v_xy)) < 0.2:
+            return 0.0
+        error = math.remainder(math.atan2(v_xy[1], v_xy[0]) - yaw, math.tau)
+        return float(np.clip(2.0 * error, -self.params.sweep_rate, self.params.sweep_rate))
+
+    def phase_command(
+        self, xy: np.ndarray, z: float, yaw: float, carrier_xy: np.ndarray, radius: float
+    ) -> tuple[np.ndarray, float, float]:
+        """Horizontal velocity (m/s, world), climb rate (m/s) and yaw rate (rad/s) of the current phase."""
+        p = self.params
+        vz = float(np.clip(1.0 * (p.height - z), -0.5, 0.5))
+        if self.phase == "climb":
+            self.feedback_message = f"climbing to {p.height:.1f} m"
+            if abs(p.height - z) < 0.15:
+                self.phase = "plan"
+            return np.zeros(2), vz, 0.0
+        if self.phase == "plan":
+            if self.world.now + 1e-9 >= self.replan_at or math.isinf(self.replan_at):
+                self.plan(xy, carrier_xy, radius)
+            if self.phase == "plan":
+                return np.zeros(2), vz, 0.0
+        if self.phase == "fly":
+            v_xy, arrived = self.follow(xy)
+            if arrived or self.flown >= p.D_e:
+                self.start_sweep(xy)
+                return np.zeros(2), vz, 0.0
+            return v_xy, vz, self.face(v_xy, yaw)
+        if self.phase == "catch_up":
+            return np.zeros(2), vz, 0.0  # the leash commands the catch-up flight
+        # sweep
+        turned = self.heading_turned
+        self.feedback_message = f"yaw sweep {math.degrees(turned):.0f}° of {math.degrees(p.sweep_angle):.0f}°"
+        if turned >= p.sweep_angle:
+            self.phase, self.replan_at = "plan", math.inf
+            return np.zeros(2), vz, 0.0
+        return np.zeros(2), vz, min(p.sweep_rate, 2.0 * (p.sweep_angle - turned) + 0.05)
+
+    def plan(self, xy: np.ndarray, carrier_xy: np.ndarray, radius: float) -> None:
+        """Choose the next goal, plan the path there and cut it at D_e; or head back to the carrier."""
+        p = self.params
+        # goals inside the leash disc now and where the carrier will be by the end of the next sweep
+        horizon = p.D_e / p.speed + p.sweep_angle / p.sweep_rate
+        ahead = carrier_xy + np.asarray(self.carrier.velocity()[0][:2]) * horizon
+        allowed = self.map.disc(carrier_xy, radius - SOFT_ZONE) & self.map.disc(ahead, radius - SOFT_ZONE)
+        if not allowed.any():
+            allowed = self.map.disc(ahead, radius - SOFT_ZONE)
+        passable = self.map.disc(carrier_xy, radius) | allowed | self.map.disc(xy, 1.0)
+        start = self.map.nearest_free(xy, passable)
+        self.replan_at = self.world.now + 2.0
+        if start is None:
+            self.feedback_message = "no free cell near the UAV"
+            return
+        distance, parent = geodesic(self.map, start, passable)
+        target_cells = self.target_cells(carrier_xy, radius)
+        self.write_coverage(target_cells)
+        excluded = np.zeros(self.map.shape, dtype=bool)
+        for stop in self.stops[-20:]:  # not back to where the last stops already looked
+            excluded |= self.map.disc(stop, 1.0)
+        goal = next_goal(self.map, np.where(allowed, distance, np.inf), target_cells & ~self.seen, 2.0, 2.0 * p.D_e, excluded)
+        if goal is None:  # nothing left to survey within reach: stay close to the carrier
+            near = self.map.disc(carrier_xy, 1.5) & np.isfinite(distance)
+            if not near.any() or self.map.disc(xy, 2.0)[self.map.index(carrier_xy)]:
+                self.feedback_message = "area surveyed: holding near the carrier"
+                return
+            goal = min(map(tuple, np.argwhere(near)), key=lambda c: distance[c])
+        cells = shortcut(self.map, grid_path(self.map, parent, goal))
+        points = np.vstack([xy] + [self.map.point(c) for c in cells[1:]] if len(cells) > 1 else [xy, self.map.point(goal)])
+        self.waypoints = truncate(points, p.D_e - self.flown if self.flown < p.D_e else p.D_e)
+        self.phase = "fly"
+        goal_xy, stop_xy = self.map.point(goal), self.waypoints[-1]
+        phase_event(self, "fly", goal=[round(float(v), 2) for v in goal_xy], to=[round(float(v), 2) for v in stop_xy])
+
+    def follow(self, xy: np.ndarray) -> tuple[np.ndarray, bool]:
+        """Velocity along the way-points (m/s, world) braking onto the last one; whether it is reached."""
+        p = self.params
+        while len(self.waypoints) > 2 and np.linalg.norm(self.waypoints[1] - xy) < 0.3:
+            self.waypoints = self.waypoints[1:]  # passed a corner of the path
+        target = self.waypoints[1] if len(self.waypoints) > 1 else self.waypoints[0]
+        to_end = float(np.linalg.norm(self.waypoints[-1] - xy))
+        direction = target - xy
+        norm = float(np.linalg.norm(direction))
+        self.feedback_message = f"flying, {to_end:.1f} m to the next stop ({self.flown:.1f} m since the last)"
+        if to_end < 0.1:
+            return np.zeros(2), True
+        speed = min(p.speed, math.sqrt(2.0 * 1.5 * to_end), 1.5 * to_end + 0.05)
+        return direction / max(norm, 1e-9) * speed, False
+
+    def start_sweep(self, xy: np.ndarray) -> None:
+        """Stop here for a yaw sweep (recorded as a ``sweep`` phase with the distance flown since the last stop)."""
+        phase_event(self, "sweep", position=[round(float(v), 3) for v in xy], flown=round(self.flown, 3))
+        self.stops.append(xy.copy())
+        self.phase, self.flown, self.heading_turned = "sweep", 0.0, 0.0
+
+    # -------------------------------------------------------- constraints
+    def leash_radius(self, z: float) -> float:
+        """Horizontal distance (m) to the carrier the UAV is held within: D_team − margin, less the height difference."""
+        p = self.params
+        limit = p.D_team - p.leash_margin
+        dz = z - float(self.carrier.pose()[0][2])
+        return math.sqrt(max(limit**2 - dz**2, 0.0))
+
+    def leash(self, v_xy: np.ndarray, xy: np.ndarray, carrier_xy: np.ndarray, radius: float) -> np.ndarray:
+        """``v_xy`` blended, over the last ``SOFT_ZONE`` m inside ``radius``, into a catch-up flight toward the carrier.
+
+        The catch-up velocity follows the free path to the carrier (never
+        straight through a wall) at the carrier's speed + 0.5 m/s (at least
+        ``speed``). Fully blended, the phase becomes ``catch_up`` (a sweep or
+        a leg is abandoned) until the UAV is back ``SOFT_ZONE`` + 0.5 m inside.
+        """
+        d = float(np.linalg.norm(xy - carrier_xy))
+        fade = float(np.clip((d - (radius - SOFT_ZONE)) / SOFT_ZONE, 0.0, 1.0))
+        if self.phase == "catch_up" and d < radius - SOFT_ZONE - 0.5:
+            self.phase, self.replan_at = "plan", math.inf
+        if fade <= 0.0 and self.phase != "catch_up":
+            return v_xy
+        v_carrier = float(np.linalg.norm(self.carrier.velocity()[0][:2]))
+        v_catch = self.path_direction(xy, carrier_xy) * max(self.params.speed, v_carrier + 0.5)
+        if fade >= 1.0 and self.phase != "catch_up":
+            phase_event(self, "catch_up", distance=round(d, 3))
+            self.phase = "catch_up"
+        if self.phase == "catch_up":
+            self.feedback_message = f"catching up with {self.params.carrier}: {d:.1f} m away"
+            return v_catch
+        return (1.0 - fade) * v_xy + fade * v_catch
+
+    def path_direction(self, xy: np.ndarray, carrier_xy: np.ndarray) -> np.ndarray:
+        """Unit vector (world) along the free grid path from the UAV to the carrier (refreshed every 0.5 s)."""
+        if self.world.now < self.catch_up_until:
+            return self.catch_up_direction
+        self.catch_up_until = self.world.now + 0.5
+        reach = float(np.linalg.norm(xy - carrier_xy)) + 2.0
+        allowed = self.map.disc(carrier_xy, reach)
+        start = self.map.nearest_free(carrier_xy, allowed)
+        uav_cell = self.map.nearest_free(xy, allowed & self.map.disc(xy, 1.0))
+        direction = carrier_xy - xy
+        if start is not None and uav_cell is not None:
+            _, parent = geodesic(self.map, start, allowed)
+            cells = shortcut(self.map, grid_path(self.map, parent, uav_cell)[::-1])
+            if len(cells) > 1:
+                direction = self.map.point(cells[1]) - xy
+        self.catch_up_direction = direction / max(float(np.linalg.norm(direction)), 1e-9)
+        return self.catch_up_direction
+
+    # ------------------------------------------------------------ sensing
+    def target_cells(self, carrier_xy: np.ndarray, radius: float) -> np.ndarray:
+        """Cells of the survey area within the leash disc and reachable inside it from the carrier."""
+        allowed = self.map.disc(carrier_xy, radius)
+        start = self.map.nearest_free(carrier_xy, allowed)
+        if start is None:
+            return np.zeros(self.map.shape, dtype=bool)
+        distance, _ = geodesic(self.map, start, allowed)
+        return self.map.area & np.isfinite(distance)
+
+    def write_coverage(self, target_cells: np.ndarray) -> None:
+        total = int(target_cells.sum())
+        coverage = float((target_cells & self.seen).sum() / total) if total else 1.0
+        self.write(self.params.coverage_key, coverage)
+        self.context.metric("coverage", coverage, robot=self.robot_name)
+
+    def look(self) -> None:
+        """Survey with the front camera's latest frame: mark the cells in view, look for the target."""
+        reading = self.camera.read()
+        if reading is None:
+            return
+        frame = reading.data
+        bearings, ranges = level_ranges(frame.depth, frame.K, frame.rotation)
+        self.seen |= visible_cells(self.map, frame.position[:2], bearings, ranges, self.params.view_range)
+        if not self.found and len(self.target_points) and target_in_view(
+            frame.depth, frame.K, frame.position, frame.rotation, self.target_points, self.params.target_range
+        ):
+            self.found = True
+            self.write(self.params.target_key, True)
+            phase_event(self, "target_found", target=self.params.target, uav=[round(float(v), 2) for v in frame.position])
+            self.context.metric("target_found", 1.0, robot=self.robot_name)

@@ -1,0 +1,53 @@
+"""What the UAV skills of the docking family share: the carrier they work with, their blackboard keys, phase events.
+
+A UAV skill (``explore``, ``rendezvous``, ``relative_hold``, ``deploy``)
+runs on the UAV (``robot:``) and names its carrier, a team member of class
+``MobileManipulator``, by the parameter ``carrier``. It reaches the carrier
+through :func:`carrier_port`, so that its commands to the carrier (arm
+targets) are stamped by the run's arbiter like its commands to the UAV.
+
+Blackboard keys written by the family, under the carrier's name
+(``"<carrier>/<key>"``):
+
+- :data:`DOCKING_FLAG` ``docking`` — True while a docking or a deployment is
+  in progress; ``navigate`` limits the carrier to its docking speed
+  (0.5 m/s, Narváez §V-B-1) while it holds (its ``docking_flag`` parameter
+  names this key, e.g. ``carrier/docking``);
+- :data:`UAV_POSE` ``uav_pose_M`` — the last eye-in-hand measurement of the
+  UAV (an :class:`~.observer.UavObservation`);
+- :data:`UAV_STORED` ``uav_stored`` — True while a UAV is stored on the
+  carrier (written by ``store`` and ``deploy``).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from marsupial.trees.arbitration import CommandPort
+from marsupial.world.errors import UnknownNameError
+
+if TYPE_CHECKING:
+    from marsupial.trees.skill import Skill
+
+DOCKING_FLAG = "docking"
+UAV_POSE = "uav_pose_M"
+UAV_STORED = "uav_stored"
+
+
+def carrier_port(skill: Skill, name: str) -> CommandPort:
+    """The team member ``name`` as ``skill`` commands it (through the run's arbiter); it must be a carrier.
+
+    A carrier is a robot with an arm, its kinematics and a docking device
+    (the ``mobile_manipulator``). Raises :class:`UnknownNameError` naming the
+    team's carriers when ``name`` is not one of them.
+    """
+    robots = skill.world.robots
+    carriers = [n for n, r in robots.items() if hasattr(r, "docking") and hasattr(r, "arm_kinematics")]
+    if name not in carriers:
+        raise UnknownNameError(f"carrier of {skill.name} (a mobile_manipulator)", name, carriers)
+    return CommandPort(robots[name], skill.context.arbiter, skill.id, skill.name)
+
+
+def phase_event(skill: Skill, phase: str, **fields: Any) -> None:
+    """Record that ``skill`` entered ``phase`` (a ``state_change`` event with the node, skill, robot and ``fields``)."""
+    skill.context.event("state_change", node=skill.name, skill=skill.kind, robot=skill.robot_name, phase=phase, **fields)

@@ -1,0 +1,62 @@
+"""Ticks mission nodes against a real world without a mission file (skill-level tests), optionally logging to MCAP."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import py_trees
+from py_trees.behaviour import Behaviour
+from py_trees.common import Status
+
+from marsupial.trees.recorder import Recorder
+from marsupial.trees.skill import NodeParams, RunContext
+from marsupial.world import World
+
+
+class Harness:
+    """A run context over ``world`` that ticks a tree at ``tick_hz`` (simulated), like the runner does.
+
+    With ``log_path`` the nodes' events and metrics and the robots' poses
+    (every tick) are recorded to that MCAP file; :meth:`close` finalises it.
+    """
+
+    def __init__(self, world: World, tick_hz: float = 10.0, log_path: str | Path | None = None):
+        py_trees.blackboard.Blackboard.clear()
+        self.world = world
+        self.recorder = Recorder(log_path, {"mission_name": "harness"}) if log_path is not None else None
+        self.context = RunContext(world=world, recorder=self.recorder)
+        self.period = 1.0 / tick_hz
+
+    def node(self, cls: type, robot: str | None = None, name: str | None = None, **params) -> Behaviour:
+        """A node of class ``cls`` on ``robot`` with ``params`` (validated like a mission's)."""
+        validated: NodeParams = cls.Params.model_validate(params)
+        return cls(name or cls.__name__.lower(), validated, self.context, robot)
+
+    def run(self, root: Behaviour, seconds: float, on_tick: Callable[[], None] | None = None) -> Status:
+        """Tick ``root`` until it ends or ``seconds`` of simulated time pass; returns its last status."""
+        end = self.world.now + seconds
+        while True:
+            self.context.arbiter.new_tick()
+            root.tick_once()
+            if self.recorder is not None:
+                self.recorder.log_robot_poses(self.world.now, {n: r.pose() for n, r in self.world.robots.items()})
+            if on_tick is not None:
+                on_tick()
+            if root.status in (Status.SUCCESS, Status.FAILURE) or self.world.now + 1e-9 >= end:
+                return root.status
+            self.world.step(self.period)
+
+    def stop(self, root: Behaviour) -> None:
+        """Stop a still-running tree as the runner does at the end of a run."""
+        if root.status == Status.RUNNING:
+            root.stop(Status.INVALID)
+
+    def close(self) -> None:
+        """Finalise the log (if any)."""
+        if self.recorder is not None:
+            self.recorder.close("success")
+
+    def blackboard(self, key: str):
+        """Value of a blackboard key (``None`` if unset)."""
+        return py_trees.blackboard.Blackboard.storage.get(key if key.startswith("/") else "/" + key)

@@ -1,0 +1,141 @@
+"""explore (Narváez §V-A): the UAV surveys the rooms around the carrier, stops every D_e for a yaw sweep, never leaves D_team.
+
+One mission in ``usar_building``: the carrier follows the operator's guide
+path at 0.3 m/s (``navigate``) while the UAV explores around it; everything
+is read back from the MCAP log (poses at 5 Hz, the skill's phase events,
+the coverage metric).
+"""
+
+import math
+
+import numpy as np
+import pytest
+from py_trees.common import Status
+from skill_harness import Harness
+
+from marsupial.skills.uav_docking.coverage import FlightMap, level_ranges, next_goal, target_in_view, visible_cells
+from marsupial.skills.uav_docking.explore import Explore
+from marsupial.trees.replay import read_log
+from marsupial.trees.runner import run_mission
+from marsupial.world import World
+from marsupial.world.robots.base import yaw_of
+
+D_E, D_TEAM = 1.5, 4.5  # m: smaller than the defaults so that a short run meets both constraints many times
+
+MISSION = f"""
+mission: explore_test
+world: {{scene: usar_building, seed: 3}}
+team:
+  carrier: {{robot: mobile_manipulator, pose: [-13, -7, 0.73]}}
+  uav: {{robot: bebop2, pose: [-12.4, -7.0, 1.2, 0.0]}}
+run: {{tick_hz: 10, until: 45}}
+tree:
+  parallel:
+    - {{skill: navigate, robot: carrier, params: {{max_speed: 0.3}}}}
+    - {{skill: explore, robot: uav, params: {{D_e: {D_E}, D_team: {D_TEAM}, sweep_angle: 3.1416}}}}
+"""
+
+
+@pytest.fixture(scope="module")
+def log(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("explore")
+    path = folder / "explore.yaml"
+    path.write_text(MISSION)
+    result = run_mission(str(path), log_path=folder / "run.mcap", progress=False)
+    assert result.outcome == "time_limit", result.message
+    return read_log(folder / "run.mcap")
+
+
+def phases(log, phase):
+    return [e for e in log.events_of("state_change") if e.get("phase") == phase]
+
+
+def test_uav_never_leaves_D_team_of_the_moving_carrier(log):
+    t_uav, p_uav = log.poses("uav")
+    t_car, p_car = log.poses("carrier")
+    assert np.array_equal(t_uav, t_car)
+    distance = np.linalg.norm(p_uav - p_car, axis=1)
+    assert distance.max() < D_TEAM
+    assert np.linalg.norm(p_car[-1] - p_car[0]) > 10.0  # the carrier really moved away from the start
+    assert distance.max() > D_TEAM - 1.5  # and the constraint was binding
+
+
+def test_uav_stops_every_D_e_for_a_yaw_sweep(log):
+    events = [e for e in log.events_of("state_change") if "phase" in e]
+    sweeps = [(e, after) for e, after in zip(events, events[1:]) if e["phase"] == "sweep"]
+    assert len(sweeps) >= 5
+    legs = [e["flown"] for e, _ in sweeps[1:]]  # exploration flight before each stop (the first is at the start)
+    assert max(legs) <= D_E + 0.1  # a stop at the latest every D_e
+    assert np.median(legs) > 0.8 * D_E
+    t, p, q = log.poses("uav", orientation=True)
+    _, p_carrier = log.poses("carrier")
+    yaw = np.unwrap([yaw_of(x) for x in q])
+    for sweep, after in sweeps:
+        window = (t >= sweep["t"]) & (t <= after["t"])
+        assert np.ptp(yaw[window]) > 0.9 * math.pi  # the heading turned through the sweep angle
+        moved = np.linalg.norm(p[window][-1, :2] - p[window][0, :2])
+        carrier_moved = np.linalg.norm(p_carrier[window][-1, :2] - p_carrier[window][0, :2])
+        assert moved < 0.6 * carrier_moved + 0.1  # held in place but for the pull of the D_team leash
+
+
+def test_coverage_is_written_for_area_explored(log):
+    t, coverage = log.metric("coverage", robot="uav")
+    assert len(coverage) >= 3
+    assert np.all((coverage >= 0.0) & (coverage <= 1.0))
+    assert coverage.max() > 0.3
+
+
+def test_walls_hide_what_is_behind_them_from_the_coverage():
+    with World(scene="usar_building") as world:
+        grid = FlightMap.from_scene(world.scene, 1.5, 0.5, 0.45, ("room", "hall", "corridor"))
+        # in the hall 1.5 m from its north wall (y = 4, solid for x -9.3..-5.1), facing it
+        uav = world.add_robot("bebop2", "uav", pose=[-7.2, 2.5, 1.5, math.pi / 2])
+        world.step(0.05)
+        frame = uav.sensor("front_camera").read().data
+    bearings, ranges = level_ranges(frame.depth, frame.K, frame.rotation)
+    assert np.median(ranges) == pytest.approx(1.5 - 0.1, abs=0.2)  # the wall's face, 0.1 m thick half
+    seen = visible_cells(grid, frame.position[:2], bearings, ranges, 6.0)
+    x, y = grid.centers()
+    assert seen[(np.abs(x + 7.2) < 0.5) & (y > 3.0) & (y < 3.8)].all()  # the hall up to the wall
+    assert not seen[y > 4.1].any()  # nothing of room_nw behind it
+    assert not seen[y < 2.4].any()  # nothing behind the camera
+
+
+def test_next_goal_prefers_the_nearer_unsurveyed_area():
+    with World(scene="usar_building") as world:
+        grid = FlightMap.from_scene(world.scene, 1.5, 0.5, 0.45, ("room", "hall", "corridor"))
+    x, _ = grid.centers()
+    unseen = grid.area & (np.abs(x + 12.0) < 1.0)  # a strip of the hall at x = -12
+    distance = np.where(grid.area, np.abs(x + 8.0), np.inf)  # path lengths from x = -8
+    goal = next_goal(grid, distance, unseen, 2.0, 4.0, np.zeros(grid.shape, dtype=bool))
+    assert goal is not None and -12.5 < grid.point(goal)[0] < -9.5
+    assert next_goal(grid, distance, np.zeros(grid.shape, dtype=bool), 2.0, 4.0, np.zeros(grid.shape, dtype=bool)) is None
+
+
+def test_explore_finds_the_target_and_succeeds():
+    with World(scene="usar_building", seed=0) as world:
+        world.add_robot("mobile_manipulator", "carrier", pose=[11.5, -4.0, -math.pi / 2])
+        uav = world.add_robot("bebop2", "uav", pose=[11.5, -3.6, 1.5, 0.0])  # in door_6, the target room south of it
+        harness = Harness(world)
+        explore = harness.node(Explore, "uav")
+        assert harness.run(explore, 20.0) == Status.SUCCESS
+        assert harness.blackboard("target_found") is True
+        p_target = np.asarray(world.scene.object("target").position)
+        assert np.linalg.norm(uav.pose()[0] - p_target) < 6.0
+
+
+def test_target_behind_a_wall_is_not_found():
+    with World(scene="usar_building", seed=0) as world:
+        uav = world.add_robot("bebop2", "uav", pose=[12.9, -1.5, 1.5, -math.pi / 2])  # in the lobby, facing the target
+        world.step(0.05)  # room's north wall (y = -3) between them
+        frame = uav.sensor("front_camera").read().data
+        obj = world.scene.object("target")
+        points = np.array([obj.position, np.add(obj.position, [0, 0, 0.15])])
+        assert not target_in_view(frame.depth, frame.K, frame.position, frame.rotation, points, 10.0)
+        uav.command_velocity(0.0, 0.0, 0.0)
+        facing_south = world.bullet.getQuaternionFromEuler([0, 0, -math.pi / 2])
+        world.bullet.resetBasePositionAndOrientation(uav.body_id, [12.9, -4.0, 1.5], facing_south)
+        world.step(0.05)
+        frame = uav.sensor("front_camera").read().data  # inside the room, 3.6 m away
+        assert target_in_view(frame.depth, frame.K, frame.position, frame.rotation, points, 10.0)
+        assert not target_in_view(frame.depth, frame.K, frame.position, frame.rotation, points, 3.0)  # beyond range
