@@ -10,4 +10,14 @@ Algorithms, numpy in and out:
   world frame and its prediction over the path time (§3.3.2).
 - :mod:`.control` — height-adaptive PI (§3.3.1) and the platform tracker that
   feeds it the measured (reactive) or predicted (predictive) platform position.
+
+Behaviours built on them:
+
+- :mod:`.tracking` — the tracking module one UAV's skills share (detection,
+  tracker, loss clock, the five states of §3.1) and the gain schedules.
+- :mod:`.skills` — ``takeoff``, ``follow`` (``track_reactive``,
+  ``track_predictive``), ``land``, ``relocalize`` for the ``ardrone2`` and
+  ``drive_pattern`` for the ``summit_xl``.
+- :mod:`.conditions` — ``platform_lost``, ``landed``, ``flight_time``: the
+  transitions of the state machine (``missions/subtrees/landing_cycle.yaml``).
 """

@@ -26,6 +26,13 @@ law read in metres, i.e. the nearly constant gains of Table 1, is
 ``PIGains(T_p=0.002, T_i=0.002)``: with ``K_i(4 m)`` = 0.198 instead of 0.1
 it halves the lag on a circular track (see :class:`PlatformTracker`).
 
+The landing skills default to that printed law (schedule ``table1`` of
+:data:`~.tracking.GAIN_SCHEDULES`): with ``p_z`` in metres it reproduces
+the paper's Table 1 (0.694 / 0.697 and 0.198 / 0.199), which the fitted
+``T`` does not, and the 0.45 / 0.1 values are the manual trackbar defaults
+of the authors' node, not a schedule it used. ``PIGains()`` (schedule
+``manual_fit``) stays selectable.
+
 :class:`PlatformTracker` feeds the PI either the last measured platform
 position (``"reactive"``, §3.3.1) or the position predicted by the Kalman
 filter one path time ahead (``"predictive"``, §3.3.2); both take the
@@ -82,14 +89,26 @@ class HeightAdaptivePI:
     feed-forward velocity, with two guards the paper leaves out: the
     command's norm is clipped to ``max_speed`` (the vehicle's SDK limit), and
     the integral is frozen while the command is clipped and bounded so that
-    ``K_i |∫e|`` alone never exceeds ``max_speed``.
+    ``K_i |∫e|`` alone never exceeds ``max_speed``. With ``integral_band``
+    (m; not in the paper) the error is integrated only while its norm is
+    within the band (conditional integration): when a feed-forward supplies
+    the platform's velocity, the integral only has to trim a small bias, and
+    integrating a large transient error would wind it up into an overshoot.
     """
 
-    def __init__(self, gains: PIGains = PIGains(), max_speed: float = ARDRONE2.limits.max_speed_xy):
+    def __init__(
+        self,
+        gains: PIGains = PIGains(),
+        max_speed: float = ARDRONE2.limits.max_speed_xy,
+        integral_band: float | None = None,
+    ):
         if max_speed <= 0.0:
             raise ValueError(f"max_speed must be > 0 m/s, got {max_speed}")
+        if integral_band is not None and integral_band <= 0.0:
+            raise ValueError(f"integral_band must be > 0 m or None, got {integral_band}")
         self.gains = gains
         self.max_speed = max_speed
+        self.integral_band = integral_band
         self.integral = np.zeros(2)  # ∫e dt (m·s)
 
     def reset(self) -> None:
@@ -104,7 +123,8 @@ class HeightAdaptivePI:
         error = np.asarray(error, dtype=float)[:2]
         base = np.zeros(2) if feedforward is None else np.asarray(feedforward, dtype=float)[:2]
         kp, ki = self.gains.at(height)
-        integral = self.integral + error * max(dt, 0.0)
+        integrate = self.integral_band is None or float(np.hypot(*error)) <= self.integral_band
+        integral = self.integral + error * max(dt, 0.0) if integrate else self.integral.copy()
         if ki > 0.0:
             norm = float(np.hypot(*integral))
             bound = self.max_speed / ki
@@ -140,7 +160,8 @@ class PlatformTracker:
     over ``K_i``: ``v·ω / K_i`` = 0.25 m at v = 0.5 m/s, ω = 0.05 rad/s and
     ``K_i(4 m)`` = 0.1. The feed-forward removes most of that lag; use it
     with ``path_time_s = 0``, since a path time then only adds a lead of
-    ``v · path_time``.
+    ``v · path_time``. ``integral_band`` is the PI's conditional integration
+    (:class:`HeightAdaptivePI`), meant for the feed-forward.
     """
 
     def __init__(
@@ -150,6 +171,7 @@ class PlatformTracker:
         kalman: KalmanParams = KalmanParams(),
         max_speed: float = ARDRONE2.limits.max_speed_xy,
         velocity_feedforward: bool = False,
+        integral_band: float | None = None,
     ):
         if mode not in MODES:
             raise UnknownNameError("tracking mode", mode, MODES)
@@ -157,7 +179,7 @@ class PlatformTracker:
             raise ValueError("velocity_feedforward needs the Kalman filter's velocity: use mode='predictive'")
         self.mode = mode
         self.velocity_feedforward = velocity_feedforward
-        self.pi = HeightAdaptivePI(gains, max_speed)
+        self.pi = HeightAdaptivePI(gains, max_speed, integral_band)
         self.predictor = PlatformPredictor(kalman)
         self._measured: np.ndarray | None = None
         self._last_command_t: float | None = None

@@ -10,8 +10,10 @@ OpenCV, whole-array operations only:
 5. probabilistic Hough lines on the edges (line 7): a platform must show
    straight sides, so a frame without a line has no platform;
 6. polygon fitting (line 8): the outer contour of the edge image, closed
-   along the image border where the platform leaves the view, simplified
-   by ``cv2.approxPolyDP``;
+   along the image border where the platform leaves the view; its convex
+   hull (the platform is a convex square, and a gap in the Canny edges
+   would otherwise fold the contour onto itself, with a near-zero area and
+   a meaningless centroid) simplified by ``cv2.approxPolyDP``;
 7. centroid from the first-order moments of the polygon (line 9).
 
 Only the region of interest around the mask's bounding box (plus a margin)
@@ -27,7 +29,10 @@ is pulled towards the image centre. When the platform's side length is
 given (:attr:`DetectionParams.platform_side_m`), each side that is really
 seen fixes the centre at half a side (``side · f / Z`` pixels) inside it, so
 the polygon is completed to the full square before its moments are taken
-(:attr:`Detection.truncated` tells that this happened).
+(:attr:`Detection.truncated` tells that this happened). When no side is
+seen along one of the square's axes (the platform spans the whole view that
+way), its centre cannot be located along it and the frame gives no
+detection, rather than the visible part's centroid.
 
 Frames: image pixels ``(u, v)`` (u right, v down); the camera frame is
 OpenCV's optical frame (x right, y down, z along the optical axis), metres.
@@ -158,7 +163,9 @@ def detect_platform(
 
     Returns:
         The :class:`Detection`, or ``None`` when the frame is discarded (tilt
-        beyond ``params.max_tilt``, no valid height) or shows no platform.
+        beyond ``params.max_tilt``, no valid height), shows no platform, or
+        (with ``params.platform_side_m``) shows a platform cut by the border
+        whose centre cannot be located (no side seen along one axis).
     """
     rgb = np.asarray(rgb)
     if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.dtype != np.uint8:
@@ -189,8 +196,10 @@ def detect_platform(
     edge_px = cv2.findNonZero(edges) if p.platform_side_m is not None else None  # the sides, before closing
     border = _close_along_image_border(edges, blurred, (x0 == 0, y0 == 0, x1 == cols, y1 == rows))
     contours, _ = cv2.findContours(edges, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-    contour = max(contours, key=cv2.contourArea)
-    polygon = cv2.approxPolyDP(contour, p.approx_epsilon * cv2.arcLength(contour, True), True)
+    hulls = [cv2.convexHull(c) for c in contours]  # a gap in the edges must not fold the outline onto itself
+    k = max(range(len(contours)), key=lambda i: cv2.contourArea(hulls[i]))
+    contour, hull = contours[k], hulls[k]
+    polygon = cv2.approxPolyDP(hull, p.approx_epsilon * cv2.arcLength(hull, True), True)
     polygon = polygon.reshape(-1, 2).astype(float) + (x0, y0)
     truncated = border and bool(_on_border(contour.reshape(-1, 2) + (x0, y0), cols, rows).any())
     if truncated and p.platform_side_m is not None:
@@ -198,6 +207,8 @@ def detect_platform(
         contour_px = contour.reshape(-1, 2).astype(float) + (x0, y0)
         edge_px = edge_px.reshape(-1, 2).astype(float) + (x0, y0)
         polygon = _complete_square(polygon, contour_px, edge_px, lines, side_px, cols, rows, p.min_side_support_px)
+        if polygon is None:
+            return None
     m = cv2.moments(polygon.astype(np.float32))  # line 9: first-order moments of the polygon area
     if m["m00"] < p.min_area_px:
         return None
@@ -243,7 +254,7 @@ def _complete_square(
     width: int,
     height: int,
     min_support: int,
-) -> np.ndarray:
+) -> np.ndarray | None:
     """The full square of side ``side_px`` whose seen sides match a platform cut by the image border.
 
     The square's orientation comes from the Hough segments (length-weighted
@@ -251,28 +262,29 @@ def _complete_square(
     the edge pixels of the seen sides. Along each of the square's two axes a
     side is *seen* when at least ``min_support`` edge pixels lie at the
     extreme of the outline's points off the image border: two seen sides put
-    the centre halfway between them, one puts it ``side_px / 2`` inside it,
-    none leaves the centroid of the visible polygon on that axis.
+    the centre halfway between them, one puts it ``side_px / 2`` inside it.
+    Returns ``None`` when no side is seen along one axis: the centre is then
+    not observable that way.
     """
     edge_px = edge_px[~_on_border(edge_px, width, height)]
     contour = contour[~_on_border(contour, width, height)]
+    m = cv2.moments(polygon.astype(np.float32))
+    visible_centroid = np.array([m["m10"], m["m01"]]) / max(m["m00"], 1e-9)
     du, dv = lines[:, 2] - lines[:, 0], lines[:, 3] - lines[:, 1]
     theta = _mean_side_angle(np.arctan2(dv, du), np.hypot(du, dv))
     fits = [
         cv2.fitLine(edge_px[support].astype(np.float32), cv2.DIST_L2, 0, 0.01, 0.01)[:2, 0]
         for axis in _axes(theta)
-        for _, support in _seen_sides(axis, contour, edge_px, min_support)
+        for _, support in _seen_sides(axis, contour, edge_px, visible_centroid, min_support)
     ]
     if fits:
         fits = np.asarray(fits)
         theta = _mean_side_angle(np.arctan2(fits[:, 1], fits[:, 0]), np.ones(len(fits)))
-    m = cv2.moments(polygon.astype(np.float32))
-    visible_centroid = np.array([m["m10"], m["m01"]]) / max(m["m00"], 1e-9)
     centre = np.zeros(2)
     for axis in _axes(theta):
         sides = [
             (inward, float((edge_px[support] @ axis).mean()))
-            for inward, support in _seen_sides(axis, contour, edge_px, min_support)
+            for inward, support in _seen_sides(axis, contour, edge_px, visible_centroid, min_support)
         ]
         if len(sides) == 2:
             along = 0.5 * (sides[0][1] + sides[1][1])
@@ -280,7 +292,7 @@ def _complete_square(
             inward, offset = sides[0]
             along = offset + inward * 0.5 * side_px
         else:
-            along = float(visible_centroid @ axis)
+            return None
         centre += along * axis
     half = 0.5 * side_px
     return centre + np.array([[-half, -half], [half, -half], [half, half], [-half, half]]) @ _axes(theta)
@@ -298,21 +310,25 @@ def _axes(theta: float) -> np.ndarray:
 
 
 def _seen_sides(
-    axis: np.ndarray, contour: np.ndarray, edge_px: np.ndarray, min_support: int
+    axis: np.ndarray, contour: np.ndarray, edge_px: np.ndarray, visible_centroid: np.ndarray, min_support: int
 ) -> list[tuple[float, np.ndarray]]:
     """Sides of the outline perpendicular to ``axis`` that are real platform edges.
 
     Returns ``(inward, support)`` per seen side: ``inward`` is +1 for the side
     at the outline's minimum along ``axis`` (the platform lies towards +axis)
     and -1 for the one at its maximum; ``support`` selects the edge pixels
-    within 2 px of that side.
+    within 2 px of that side. A side counts only when the visible part of
+    the platform (``visible_centroid``, px) lies on its inner side: a single
+    straight edge across the view is both the outline's minimum and maximum,
+    and only the red region beside it tells which side of the platform it is.
     """
     if len(contour) == 0:
         return []
     outline, along = contour @ axis, edge_px @ axis  # outline: off-border contour points
+    inside = float(visible_centroid @ axis)
     sides = []
     for inward, extreme in ((1.0, outline.min()), (-1.0, outline.max())):
         support = np.abs(along - extreme) <= 2.0
-        if np.count_nonzero(support) >= min_support:
+        if inward * (inside - extreme) > 0.0 and np.count_nonzero(support) >= min_support:
             sides.append((inward, support))
     return sides

@@ -65,9 +65,9 @@ class ConstantVelocityKF:
         self.P = np.eye(4)
         self._R = params.measurement_noise * np.eye(2)
 
-    def reset(self, position: np.ndarray) -> None:
-        """Start at ``position`` (m) with zero velocity and ``P = I₄``."""
-        self.x = np.array([position[0], position[1], 0.0, 0.0], dtype=float)
+    def reset(self, position: np.ndarray, velocity: np.ndarray = (0.0, 0.0)) -> None:
+        """Start at ``position`` (m) with ``velocity`` (m/s; zero by default) and ``P = I₄``."""
+        self.x = np.array([position[0], position[1], velocity[0], velocity[1]], dtype=float)
         self.P = np.eye(4)
 
     def predict(self, dt: float) -> None:
@@ -111,6 +111,15 @@ class PlatformPredictor:
     def reset(self) -> None:
         """Forget the platform (the next measurement starts the filter again)."""
         self.stamp = None
+
+    def start(self, t: float, position_world: np.ndarray, velocity_world: np.ndarray) -> None:
+        """Start the filter at ``t`` from a known platform state (world frame, m and m/s).
+
+        E.g. at take-off from a moving platform: the UAV riding it knows the
+        platform's velocity before its camera can see it.
+        """
+        self.filter.reset(position_world, velocity_world)
+        self.stamp = t
 
     def observe(self, t: float, position_world: np.ndarray) -> bool:
         """Offer the platform position measured at ``t`` (world frame, m); True if it was fused.
