@@ -198,7 +198,10 @@ def test_skills_and_schema():
     assert "Node" in schema["$defs"] and "tree" in schema["properties"]
 
 
-def test_run_without_a_mission_runs_the_default_one():
+def test_run_without_a_mission_runs_the_default_one(tmp_path):
     assert DEFAULT_MISSION in known_missions()
-    result = invoke("run", "-q")
-    assert result.exit_code == 0, result.output + result.stderr
+    log = tmp_path / "default.mcap"
+    result = invoke("run", "-q", "--until", "2", "--log", log)
+    assert result.exit_code == 1, result.output + result.stderr  # stopped by the 2 s limit, not by an error
+    run = read_log(log)
+    assert f"mission: {DEFAULT_MISSION}" in run.metadata["mission"] and run.outcome == "time_limit"
