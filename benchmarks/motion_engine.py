@@ -29,10 +29,7 @@ timed through its ``on_stage`` hook).
 from __future__ import annotations
 
 import argparse
-import json
 import math
-import os
-import platform
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -44,6 +41,8 @@ from marsupial.skills.uav_docking.engine import STAGES, MotionEngine
 from marsupial.skills.uav_docking.ik_engine import IKEngine
 from marsupial.world.kinematics import ArmKinematics
 from marsupial.world.robots.mobile_manipulator import ARM_POSES
+
+from bench_common import best_seconds, machine_info, print_tables, write_report  # noqa: E402 (next to this script)
 
 TARGET_P95_MS = 25.0
 TARGET_VERTICES = 300
@@ -201,15 +200,6 @@ def bench_cycles(quick: bool) -> dict[str, Any]:
 
 
 # ------------------------------------------------------------------ IK engine
-def best_seconds(fn: Callable[[], Any], repeats: int) -> float:
-    """Shortest wall time (s) of ``repeats`` calls of ``fn``: the least disturbed by other processes."""
-    best = math.inf
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
-    return best
-
 
 def bench_ik(quick: bool) -> dict[str, Any]:
     """Solves/s of the IK engine, closed form and DLS, 1 process vs a pool of M = 2 workers."""
@@ -273,25 +263,7 @@ def print_report(report: dict[str, Any]) -> None:
             ],
         ),
     ]
-    try:
-        from rich.console import Console
-        from rich.table import Table
-    except ImportError:
-        for title, header, rows in sections:
-            print(f"\n{title}\n" + " | ".join(header))
-            for row in rows:
-                print(" | ".join(row))
-    else:
-        console = Console()
-        for title, header, rows in sections:
-            table = Table(title=title)
-            for column in header:
-                table.add_column(column)
-            for row in rows:
-                table.add_row(*row)
-            console.print(table)
-    if "load_average_1_5_15min" in report["machine"]:
-        print(f"machine load average (1, 5, 15 min): {report['machine']['load_average_1_5_15min']}")
+    print_tables(sections, report["machine"])
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
@@ -301,16 +273,12 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="JSON report path")
     args = parser.parse_args(argv)
     report: dict[str, Any] = {
-        "machine": {"python": platform.python_version(), "platform": platform.platform(), "cpus": os.cpu_count(), "quick": args.quick},
+        "machine": machine_info(quick=args.quick),
         "planning_cycle": bench_cycles(args.quick),
         "ik_engine": bench_ik(args.quick),
     }
-    if hasattr(os, "getloadavg"):  # other processes on the machine slow every figure down
-        report["machine"]["load_average_1_5_15min"] = [round(x, 2) for x in os.getloadavg()]
     print_report(report)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(report, indent=2))
-    print(f"\nwrote {args.out}")
+    write_report(report, args.out)
     return report
 
 

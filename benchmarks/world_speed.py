@@ -33,10 +33,7 @@ from __future__ import annotations
 import argparse
 import cProfile
 import io
-import json
 import math
-import os
-import platform
 import pstats
 import time
 from collections.abc import Callable
@@ -50,6 +47,8 @@ import pybullet
 from marsupial.world import World
 from marsupial.world.sensors.base import SensorConfig
 from marsupial.world.sensors.camera import Camera, Intrinsics
+
+from bench_common import best_seconds, machine_info, print_tables, write_report  # noqa: E402 (next to this script)
 
 TARGET_RTF_WITHOUT_CAMERA = 50.0
 TARGET_RTF_WITH_CAMERA = 3.0
@@ -69,15 +68,6 @@ def single_threaded() -> str:
     cv2.setNumThreads(1)
     return "single thread (pybullet DIRECT, cv2.setNumThreads(1)), not pinned"
 
-
-def best_seconds(fn: Callable[[], Any], repeats: int) -> float:
-    """Shortest wall time (s) of ``repeats`` calls of ``fn``: the least disturbed by other processes."""
-    best = math.inf
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
-    return best
 
 
 def field_with_pair(seed: int = 0) -> World:
@@ -272,25 +262,7 @@ def print_report(report: dict[str, Any]) -> None:
             ],
         ),
     ]
-    try:
-        from rich.console import Console
-        from rich.table import Table
-    except ImportError:
-        for title, header, rows in sections:
-            print(f"\n{title}\n" + " | ".join(header))
-            for row in rows:
-                print(" | ".join(row))
-    else:
-        console = Console()
-        for title, header, rows in sections:
-            table = Table(title=title)
-            for column in header:
-                table.add_column(column)
-            for row in rows:
-                table.add_row(*row)
-            console.print(table)
-    if "load_average_1_5_15min" in report["machine"]:
-        print(f"machine load average (1, 5, 15 min): {report['machine']['load_average_1_5_15min']}")
+    print_tables(sections, report["machine"])
     for key, text in report.get("profiles", {}).items():
         print(f"\nprofile of {key}:\n{text}")
 
@@ -304,19 +276,15 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     args = parser.parse_args(argv)
     threads = single_threaded()
     report: dict[str, Any] = {
-        "machine": {"python": platform.python_version(), "platform": platform.platform(), "threads": threads, "cpus": os.cpu_count(), "quick": args.quick},
+        "machine": machine_info(threads=threads, quick=args.quick),
         "physics": bench_physics(args.quick),
         "cameras": bench_cameras(args.quick),
     }
     report["real_time"], profiles = bench_real_time(args.quick, args.profile)
-    if hasattr(os, "getloadavg"):  # other processes on the machine slow every figure down
-        report["machine"]["load_average_1_5_15min"] = [round(x, 2) for x in os.getloadavg()]
     if profiles:
         report["profiles"] = profiles
     print_report(report)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(report, indent=2))
-    print(f"\nwrote {args.out}")
+    write_report(report, args.out)
     return report
 
 

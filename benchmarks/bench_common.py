@@ -1,0 +1,62 @@
+"""What every benchmark script shares: best-of timing, machine facts, rich tables, the JSON report.
+
+The scripts run as ``python benchmarks/<name>.py``, so this module is found
+next to them. Wall-clock timing lives here and in the scripts only, never in tests.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import platform
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from rich.console import Console
+from rich.table import Table
+
+#: one printed table: title, column headers, rows of cell texts
+Section = tuple[str, Sequence[str], Sequence[Sequence[str]]]
+
+
+def best_seconds(fn: Callable[[], Any], repeats: int) -> float:
+    """Shortest wall time (s) of ``repeats`` calls of ``fn``: the least disturbed by other processes."""
+    best = math.inf
+    for _ in range(repeats):
+        start = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
+def machine_info(**extra: Any) -> dict[str, Any]:
+    """Python, platform, CPU count and load average (other processes slow every figure down), plus ``extra``."""
+    info: dict[str, Any] = {"python": platform.python_version(), "platform": platform.platform(), "cpus": os.cpu_count()}
+    info.update(extra)
+    if hasattr(os, "getloadavg"):
+        info["load_average_1_5_15min"] = [round(x, 2) for x in os.getloadavg()]
+    return info
+
+
+def print_tables(sections: Sequence[Section], machine: dict[str, Any]) -> None:
+    """Print each section as a rich table, then the machine's load average."""
+    console = Console()
+    for title, header, rows in sections:
+        table = Table(title=title)
+        for column in header:
+            table.add_column(column)
+        for row in rows:
+            table.add_row(*row)
+        console.print(table)
+    if "load_average_1_5_15min" in machine:
+        print(f"machine load average (1, 5, 15 min): {machine['load_average_1_5_15min']}")
+
+
+def write_report(report: dict[str, Any], out: Path) -> None:
+    """Write ``report`` as indented JSON to ``out`` (folders made as needed) and say where."""
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(report, indent=2))
+    print(f"\nwrote {out}")
