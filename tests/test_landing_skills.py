@@ -74,6 +74,13 @@ def test_a_still_platform_feels_like_the_ground_and_the_landing_fails(tmp_path):
     assert ground.tolist() == [1.0]
 
 
+def test_an_empty_battery_ends_the_cycle_with_a_failure(tmp_path):
+    result, log = _run(tmp_path, "landing_lifelong", cycles=1, **{"team.uav.options.battery_capacity_mAh": 1})
+    assert result.outcome == "failure"  # not a run that hangs until its time limit
+    outcome = next(e for e in log.events if e["kind"] == "outcome" and e["skill"] == "takeoff")
+    assert outcome["status"] == "FAILURE" and outcome["message"].startswith("motors stopped, battery at 0%")
+
+
 def test_flight_params_resolve_the_controller_variants():
     ours = FlightParams().tracker_config()
     assert (ours.mode, ours.gain_schedule, ours.velocity_feedforward, ours.path_time_s, ours.integral_band) == (

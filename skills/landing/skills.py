@@ -87,6 +87,13 @@ class FlightSkill(Skill):
         self.module: TrackingModule = tracking_module(self, self.params.platform)
         self.module.configure(self.params.tracker_config())
 
+    def motors_stopped(self) -> bool:
+        """Whether the motors have stopped under the skill (an empty battery stops them); says so in the feedback."""
+        if self.robot.motors_on:
+            return False
+        self.feedback_message = f"motors stopped, battery at {self.robot.battery.soc:.0%}"
+        return True
+
     def fly(self, vz: float, track: bool = True) -> None:
         """Send this tick's command: the tracker's x-y velocity (or none) and ``vz`` (m/s, up)."""
         vx, vy = self.module.command() if track else (0.0, 0.0)
@@ -132,6 +139,8 @@ class Takeoff(FlightSkill):
     def step(self) -> Status:
         module = self.module
         module.update()
+        if self.motors_stopped():
+            return Status.FAILURE
         self.feedback_message = f"{module.height:.2f} m above the platform"
         if not self.climb_tracking(self.params):
             return Status.RUNNING
@@ -160,6 +169,8 @@ class Follow(FlightSkill):
     def step(self) -> Status:
         module, p = self.module, self.params
         module.update()
+        if self.motors_stopped():
+            return Status.FAILURE
         seen = "not located yet" if module.offset is None else f"{np.hypot(*module.offset):.2f} m away"
         self.feedback_message = f"platform {seen}, {module.height:.2f} m above it"
         if self._until is not None and self.world.now + 1e-9 >= self._until:
@@ -194,6 +205,12 @@ class Land(FlightSkill):
     ≈0.07 m/s² for the AR.Drone 2 model, while the moving Summit XL shakes
     its rider with ≈0.4 m/s²). Sonar low but IMU still: the UAV came down on
     the ground, the skill fails.
+
+    The tracker carries over from the tracking state: the PI integral is
+    not reset at the land command (the authors' node resets it, and a PI
+    without a feed-forward then trails while it learns the platform's speed
+    again). The model's vertical speed limit (1 m/s) caps the 2.0 m/s final
+    descent.
     """
 
     class Params(FlightParams):
@@ -220,6 +237,8 @@ class Land(FlightSkill):
     def step(self) -> Status:
         module, p = self.module, self.params
         module.update()
+        if self.motors_stopped():
+            return Status.FAILURE
         if module.height < p.landed_range:
             if self._touch is None:  # first contact: where the UAV lands on the platform
                 self._touch, self._accel = self.world.now, []
@@ -280,6 +299,8 @@ class Relocalize(FlightSkill):
     def step(self) -> Status:
         module, p = self.module, self.params
         module.update()
+        if self.motors_stopped():
+            return Status.FAILURE
         if module.state == "relocalizing":
             if module.located > self._located_at_start:
                 module.set_state("tracking", self, "platform seen again")

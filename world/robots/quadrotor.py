@@ -55,7 +55,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -284,6 +284,8 @@ class Quadrotor(Robot):
         battery_soc: initial state of charge in [0, 1].
         motors_on: start with the motors running (hovering at ``pose``); default:
             on when spawned above its landed height, off when standing on the floor.
+        battery_capacity_mAh: capacity of the pack (mAh) in place of the kind's
+            (e.g. for long experiments that the paper ran without an energy model).
     """
 
     spec: QuadrotorSpec
@@ -296,6 +298,7 @@ class Quadrotor(Robot):
         sensors: dict[str, dict[str, Any]] | None = None,
         battery_soc: float = 1.0,
         motors_on: bool | None = None,
+        battery_capacity_mAh: float | None = None,
     ):
         super().__init__(world, name)
         spec = self.spec
@@ -315,7 +318,8 @@ class Quadrotor(Robot):
         self._com_base = tuple(float(c) for c in com / self.mass)
         self._inertia = tuple(pybullet.getDynamicsInfo(body, -1, physicsClientId=cid)[2])
 
-        self.battery = Battery(spec.battery, battery_soc)
+        pack = spec.battery if battery_capacity_mAh is None else replace(spec.battery, capacity_mAh=battery_capacity_mAh)
+        self.battery = Battery(pack, battery_soc)
         self._clock = world.clock
         self._cmd = (0.0, 0.0, 0.0, 0.0)
         self._cmd_frame = "body"
@@ -461,7 +465,7 @@ class Quadrotor(Robot):
 
     def hover_endurance_s(self) -> float:
         """Seconds of still hover the power model predicts from the present state of charge."""
-        return hover_endurance_s(self.spec.battery, self.spec.power.hover_power(self.mass, GRAVITY), self.battery.soc)
+        return hover_endurance_s(self.battery.spec, self.spec.power.hover_power(self.mass, GRAVITY), self.battery.soc)
 
     def state(self) -> dict[str, Any]:
         """JSON-ready state: pose and velocity (world frame), battery, motors, docking."""
