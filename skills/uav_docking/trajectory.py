@@ -31,6 +31,8 @@ import toppra.constraint
 
 from marsupial.world.robots.mobile_manipulator import JOINT_SPEED_LIMIT
 
+TINY_MOTION = 1e-3  # rad: a joint motion this small is a set-point step, not a trajectory
+
 logging.getLogger("toppra").setLevel(logging.WARNING)  # toppra logs every parametrisation at INFO
 
 
@@ -112,6 +114,8 @@ def plan_joint_trajectory(
     timed = instance.compute_trajectory(sd_start, 0.0)
     if timed is None and sd_start > 0.0:  # too fast to stop in time on this line: start from rest
         timed = instance.compute_trajectory(0.0, 0.0)
+    if timed is None and np.max(np.abs(delta)) < TINY_MOTION:  # toppra's solver fails on a few µrad: step there
+        return JointTrajectory(q_start, q_goal, None)
     if timed is None:
         raise RuntimeError(f"toppra found no parameterisation from {q_start} to {q_goal}")
     return JointTrajectory(q_start, q_goal, timed)

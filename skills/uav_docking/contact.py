@@ -1,0 +1,266 @@
+"""Contact phase (Narváez §IV-B, eqs. 13–15; docking device §IV-C, Fig. 12): Part A rises to Part B and locks it.
+
+"The Contact Phase is executed simultaneously with the Tracking Phase and
+starts with the authorization of the human operator and supervises the
+end-effector movement for a slow vertical approach toward the UAV" (§IV-B).
+This skill runs beside ``track`` (:mod:`.track`), which drives the arm; it
+steers that skill's Motion Engine through the blackboard
+(``<carrier>/contact_target``, a :class:`~.track.ContactTarget`) and reads
+how tracking goes (``<carrier>/tracking``, a :class:`~.track.TrackingState`).
+
+Phases (``state_change`` events with ``phase``):
+
+- ``authorization_requested`` — the operator is asked for the command
+  ``authorization`` (default ``authorize_contact``; the request is an event,
+  so it shows on the log); ``authorization: null`` authorizes at once
+  (benchmarks) and records ``authorized`` with ``by=parameter``;
+- ``settling`` — authorized; waits until the marker is seen, the UAV holds
+  its pose in M and the camera is centred under the bundle (both within
+  ``settle_error``) for ``settle_time``;
+- ``approach`` — P_RC is P_R raised by eq. (15), z_C = z + k_c·ln(t_c + 1),
+  written as the gap s(t_c) = s_0 − k_c·ln(t_c + 1) that Part A leaves below
+  Part B (s_0: the gap when the approach began; never below 0). The contact
+  clock t_c stops while the last ``align_gap`` would be closed on a Part B
+  farther than ``align_tolerance`` from Part A's axis (the supervision: no
+  push on a misaligned UAV). The UAV's downward sonar cone is a prohibited
+  zone of the local map (§IV-B), so the end effector never enters the beam;
+- ``capture`` — the faces touch (D_c = 0 mm, §IV-C): the electromagnet pulls
+  Part B into full contact (Fig. 12b);
+- ``locking`` — the servo levers close on Part B's ring (Fig. 12c); once
+  locked the docking device stops the UAV's motors (``on_docked``) and the
+  skill succeeds (``locked``, with the metrics ``contact_time`` and
+  ``docking_time``: from the start of tracking to the lock).
+
+The eq. (15) samples are logged as the metrics ``contact_t`` (t_c) and
+``contact_z_C`` (z_C of Part A in M).
+
+Losing the marker for ``lost_timeout`` while Part B is farther than
+``blind_range`` (closer than that the camera is too near the bundle to see
+it, and the pose estimate carries on with the odometry), or an approach
+longer than ``timeout``, cancels the contact (``contact_cancelled``): the
+magnet goes off, the target is withdrawn so that the end effector drops back
+to the tracking standoff to regain sight, and authorization is requested
+again ("for safety, the contact authorization is requested after any
+cancellation", §IV-B). After ``max_cancellations`` the skill fails.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import ClassVar
+
+from py_trees.common import Status
+from pydantic import Field
+
+from marsupial.trees.skill import Condition, NodeParams, Skill
+
+from .relative_hold import PART_A_LINK
+from .team import DOCKING_FLAG, carrier_port, phase_event
+from .track import CONTACT_TARGET, TRACKING, ContactTarget, TrackingState
+
+K_C = 0.18  # m, k_c of eq. (15): the paper prints no value; chosen so a 0.35 m gap closes in 6 s (2.6 cm/s at the end)
+
+
+def contact_height(z0: float, t_c: float, k_c: float = K_C) -> float:
+    """Eq. (15): z_C = z + k_c·ln(t_c + 1), the end effector's height (m) t_c s into the contact phase."""
+    return z0 + k_c * math.log(max(t_c, 0.0) + 1.0)
+
+
+class Contact(Skill):
+    """After the operator's authorization, raise Part A to the UAV's Part B by eq. (15), then magnet and levers lock it."""
+
+    class Params(NodeParams):
+        carrier: str = "carrier"
+        """Team member carrying the arm and Part A of the docking device (a mobile_manipulator)."""
+        authorization: str | None = "authorize_contact"
+        """Operator command that authorizes the contact phase (§IV-B); none: authorized at once (benchmarks)."""
+        k_c: float = Field(K_C, gt=0.0)
+        """Gain k_c of eq. (15) (m): fast approach first, slower at the end."""
+        settle_error: float = Field(0.04, gt=0.0)
+        """Largest UAV distance from its hold pose in M and camera offset from the bundle (m) to begin the approach."""
+        settle_time: float = Field(0.5, ge=0.0)
+        """Time (s) tracking must stay settled before the approach begins."""
+        blind_range: float = Field(0.18, ge=0.0)
+        """Gap (m) between Part A and Part B below which an unseen marker is expected (the camera is too close)."""
+        lost_timeout: float = Field(0.3, gt=0.0)
+        """Time (s) without the marker, farther than ``blind_range``, that cancels the contact."""
+        align_gap: float = Field(0.03, ge=0.0)
+        """Gap (m) the approach holds until Part B is within ``align_tolerance`` of Part A's axis (no push on a misaligned UAV)."""
+        align_tolerance: float = Field(0.008, gt=0.0)
+        """Lateral offset (m) of Part B from Part A's axis within which the last ``align_gap`` is closed (inside the magnet's 10 mm reach)."""
+        D_c: float = Field(0.0, ge=0.0)
+        """Gap (m) at which the securing sequence starts, §IV-C ("D_c = 0 mm": the faces touch, the device's contact distance)."""
+        sonar_cone: bool = True
+        """Map the UAV's downward range-finder cone as a prohibited zone (§IV-B)."""
+        timeout: float = Field(30.0, gt=0.0)
+        """Longest approach (s) before it is cancelled (a UAV that never holds still enough)."""
+        max_cancellations: int = Field(3, ge=0)
+        """Cancellations after which the skill fails."""
+
+    robot_kinds = ("Quadrotor",)
+    reads = (f"{{carrier}}/{TRACKING}",)
+    writes = (f"{{carrier}}/{CONTACT_TARGET}", f"{{carrier}}/{DOCKING_FLAG}")
+
+    # ------------------------------------------------------------ life cycle
+    def start(self) -> None:
+        self.carrier = carrier_port(self, self.params.carrier)
+        self.device = self.carrier.docking
+        sonar = self.robot.sensor("sonar")
+        self.sonar = (sonar.half_angle, sonar.max_range)
+        self.cancellations = 0
+        self.key = f"{self.params.carrier}/{CONTACT_TARGET}"
+        self.write(self.key, None)
+        self.request_authorization("contact requested")
+
+    def step(self) -> Status:
+        uav = self.robot.robot
+        state: TrackingState | None = self.read(f"{self.params.carrier}/{TRACKING}")
+        if self.device.docked is uav:
+            return self.locked(state)
+        if self.phase == "authorization_requested":
+            return self.await_authorization()
+        if self.phase == "settling":
+            return self.settle(state)
+        return self.approach(state)
+
+    def finish(self, status: Status) -> None:
+        if status != Status.SUCCESS:
+            self.device.magnet_off()
+            if self.device.docked is not self.robot.robot:
+                self.write(f"{self.params.carrier}/{DOCKING_FLAG}", False)
+        self.write(self.key, None)
+        self.leave_safe()
+
+    # ------------------------------------------------------------- phases
+    def request_authorization(self, why: str) -> None:
+        """Enter ``authorization_requested``: ask the operator (an event and a log line), or authorize at once."""
+        self.t0: float | None = None
+        self.settled_since: float | None = None
+        command = self.params.authorization
+        if command is None:
+            self.phase = "settling"
+            phase_event(self, "authorized", by="parameter", why=why)
+            return
+        self.phase = "authorization_requested"
+        phase_event(self, "authorization_requested", command=command, why=why)
+        self.feedback_message = f"waiting for the operator's '{command}' ({why})"
+
+    def await_authorization(self) -> Status:
+        command = self.params.authorization
+        channel = self.context.operator
+        said = None if channel is None else channel.handle(command)
+        if said is None:
+            return Status.RUNNING
+        self.phase = "settling"
+        phase_event(self, "authorized", by="operator", command=command, why=said.why)
+        return Status.RUNNING
+
+    def settle(self, state: TrackingState | None) -> Status:
+        """Wait for stable tracking under the UAV before the approach (P_R is the start of eq. 15)."""
+        p = self.params
+        now = self.world.now
+        settled = (
+            state is not None and state.seen and state.p_B_A is not None
+            and state.hold_error <= p.settle_error and state.camera_offset <= p.settle_error
+        )
+        if not settled:
+            self.settled_since = None
+            self.feedback_message = "authorized: waiting for stable tracking under the UAV"
+            return Status.RUNNING
+        if self.settled_since is None:
+            self.settled_since = now
+        if now - self.settled_since + 1e-9 < p.settle_time:
+            return Status.RUNNING
+        self.phase, self.t0, self.s0 = "approach", now, float(state.p_B_A[2])
+        self.t_c, self.last_t = 0.0, now
+        self.cone = None  # the sonar beam, from the UAV down to the floor (§IV-B)
+        if p.sonar_cone:
+            height = float(self.robot.pose()[0][2]) - self.world.scene.floor.height
+            self.cone = (self.sonar[0], min(self.sonar[1], height))
+        q = self.carrier.joint_positions()
+        self.z0 = float(self.carrier.arm_kinematics.forward(q, PART_A_LINK)[0][2])  # z of P_R in M, eq. (15)
+        phase_event(self, "approach", gap=round(self.s0, 4), k_c=p.k_c)
+        return self.approach(state)
+
+    def approach(self, state: TrackingState | None) -> Status:
+        """Eq. (15) on the standoff; at D_c the magnet and the levers; cancel when the marker is lost far away."""
+        p = self.params
+        now = self.world.now
+        uav = self.robot.robot
+        gap = float(state.p_B_A[2]) if state is not None and state.p_B_A is not None else math.inf
+        if state is None or (not state.seen and state.age() > p.lost_timeout and gap > p.blind_range):
+            return self.cancel(f"marker lost {gap:.2f} m from Part B")
+        if now - self.t0 > p.timeout:
+            return self.cancel(f"no lock after {p.timeout:.0f} s of approach")
+        lateral = math.hypot(*state.p_B_A[:2]) if state.p_B_A is not None else math.inf
+        aligned = lateral <= p.align_tolerance
+        if aligned or self.s0 - p.k_c * math.log(self.t_c + 1.0) > p.align_gap:  # the contact clock t_c
+            self.t_c += now - self.last_t
+        self.last_t = now
+        standoff = max(self.s0 - p.k_c * math.log(self.t_c + 1.0), 0.0)  # eq. (15) as the gap P_RC leaves
+        if not aligned:
+            standoff = max(standoff, p.align_gap)
+        distance = self.device.distance_to(uav)
+        axial = self.device.offset_to(uav)[0]
+        touching = axial <= max(p.D_c, self.device.contact_distance) and distance <= self.device.capture_distance
+        if self.phase == "approach" and touching:
+            self.device.magnet_on()  # Fig. 12b: the faces touch, the magnet forces the initial contact
+            self.phase = "capture"
+            phase_event(self, "capture", t_c=round(self.t_c, 3), distance=round(distance, 4))
+        elif self.phase != "approach" and distance > 2.0 * self.device.capture_distance:  # Part B got away
+            self.device.magnet_off()
+            self.phase = "approach"
+            phase_event(self, "capture_lost", distance=round(distance, 4))
+        if self.phase == "capture" and self.device.in_contact(uav) and self.device.lock():
+            self.phase = "locking"  # Fig. 12c: the levers close on Part B's ring
+            phase_event(self, "locking", t_c=round(self.t_c, 3))
+        elif self.phase == "locking" and not self.device.locking:  # the levers closed on nothing: try again
+            self.phase = "capture"
+            phase_event(self, "lock_failed", distance=round(distance, 4))
+        self.write(self.key, ContactTarget(standoff, self.cone))
+        self.context.metric("contact_t", self.t_c, robot=self.robot_name)
+        self.context.metric("contact_z_C", contact_height(self.z0, self.t_c, p.k_c), robot=self.robot_name)
+        self.feedback_message = f"{self.phase}: t_c {self.t_c:.1f} s, gap {distance:.3f} m (target {standoff:.3f} m)"
+        return Status.RUNNING
+
+    def locked(self, state: TrackingState | None) -> Status:
+        """Docked: record the contact time t_c and the docking time (from the start of tracking), succeed."""
+        now = self.world.now
+        fields = {"t_c": round(self.t_c, 3) if self.t0 is not None else None}
+        if self.t0 is not None:
+            self.context.metric("contact_time", now - self.t0, robot=self.robot_name)
+        if state is not None:
+            fields["docking_time"] = round(now - state.started, 3)
+            self.context.metric("docking_time", now - state.started, robot=self.robot_name)
+        phase_event(self, "locked", **fields)
+        self.feedback_message = f"{self.robot.name} locked on Part A, motors off"
+        return Status.SUCCESS
+
+    def cancel(self, why: str) -> Status:
+        """Cancel the contact: magnet off, target withdrawn (the end effector drops), authorization asked again."""
+        self.device.magnet_off()
+        self.write(self.key, None)
+        self.cancellations += 1
+        phase_event(self, "contact_cancelled", why=why, cancellations=self.cancellations)
+        if self.cancellations > self.params.max_cancellations:
+            self.feedback_message = f"contact cancelled {self.cancellations} times: {why}"
+            return Status.FAILURE
+        self.request_authorization(why)
+        return Status.RUNNING
+
+
+class Stored(Condition):
+    """Holds while the UAV is locked on its carrier's Part A and no docking or deployment is in progress."""
+
+    class Params(NodeParams):
+        carrier: str = "carrier"
+        """Team member whose docking device holds the UAV (a mobile_manipulator)."""
+
+    primary: ClassVar[str] = "carrier"
+    robot_kinds = ("Quadrotor",)
+    reads = (f"{{carrier}}/{DOCKING_FLAG}",)
+
+    def check(self) -> bool:
+        device = carrier_port(self, self.params.carrier).docking
+        busy = bool(self.read(f"{self.params.carrier}/{DOCKING_FLAG}", False))
+        return device.docked is self.robot.robot and not busy

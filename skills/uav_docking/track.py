@@ -1,0 +1,406 @@
+"""UAV motion tracking (Narváez §IV-A, Figs. 4–5): the Motion Engine drives the arm from the measured UAV pose.
+
+Every tick (Fig. 4):
+
+1. the eye-in-hand frame is measured once for every skill that looks at it
+   (:class:`~.observer.EyeInHandObserver`: AprilTag bundle → P_Q^{C_A} by
+   solvePnP → P_Q^M by eq. (1));
+2. the Motion Engine (:class:`~.engine.MotionEngine`: cord, vicinity, local
+   map from the LiDAR, RRT* graph over the IK engine at f_B = 4 Hz; PBVS,
+   V_tr, L_p and P_R at f_O = 8 Hz) turns P_Q^M into joint set-points for the
+   arm's PIDs;
+3. the UAV holds a reachable pose in the manipulator frame M — Part B at
+   ``part_b_M``, facing ``yaw_M`` — by the relative-hold law of
+   :mod:`.relative_hold` on the same measurement ("the UAV pose is being
+   controlled within M coordinates", §IV-A), whatever the carrier does.
+
+While tracking, the PBVS target P_VS puts the camera ``standoff`` straight
+below the centre of the tag plate. The end effector keeps the heading
+``ee_yaw_M`` in M (joint 6 in the middle of its range); with the UAV facing
+the carrier's rear (``yaw_M`` = π) the camera, 4.5 cm in front of Part A
+(O_C), then lies under the tag plate when Part A is under Part B, so the
+bundle stays in view during most of the contact phase.
+
+The contact phase (:mod:`.contact`, run beside this skill) writes a
+:class:`ContactTarget` on the blackboard (``<carrier>/contact_target``):
+Part A is then aimed at Part B from the standoff of eq. (15), and the UAV's
+downward sonar cone enters the local map as a prohibited zone. Without a
+contact target (none yet, or a cancelled contact) the engine tracks with the
+camera target: after a cancellation the end effector drops back to the
+tracking standoff, which brings the bundle back into view (§IV-B).
+
+Between measurements (the marker hidden) the UAV keeps moving with the
+carrier (feed-forward of the hold law) and, within the contact phase's blind
+range of Part B, the engine keeps planning on the last measured pose — the
+UAV holds still in M — so the final centimetres, where the camera is too
+close to see the tags, are flown on that estimate.
+
+Blackboard: writes ``<carrier>/tracking`` (:class:`TrackingState`, for the
+contact phase) and reads ``<carrier>/contact_target`` (with ``contact``).
+
+Frames: manipulator frame M (``arm_base``), metres, radians, seconds.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from py_trees.common import Status
+from pydantic import Field
+
+from marsupial.trees.skill import NodeParams, Skill
+from marsupial.world.contacts import ContactEvent, ContactMonitor
+from marsupial.world.robots.base import rotation_matrix
+
+from .engine import MotionEngine, MotionEngineParams
+from .observer import EyeInHandObserver
+from .pose import invert
+from .relative_hold import PART_A_LINK, CarrierFrame, HoldGains, hold_command, part_b_offset
+from .selection import PbvsTarget, SelectionParams, rot_z, yaw_of_rotation
+from .team import DOCKING_FLAG, carrier_port, phase_event
+from .vicinity import VicinityParams
+from .zones import ZoneMap, carrier_zones
+
+TRACKING = "tracking"
+"""Blackboard key (under the carrier's name) of the :class:`TrackingState`."""
+CONTACT_TARGET = "contact_target"
+"""Blackboard key (under the carrier's name) of the :class:`ContactTarget`."""
+CAMERA_FRAME = "eye_in_hand"  # the eye-in-hand optical frame C_A, aimed at the tag plate while tracking
+SONAR_SEGMENTS = 8  # cylinders covering the sonar cone (each as wide as the cone at its lower end)
+
+
+@dataclass(frozen=True)
+class ContactTarget:
+    """What the contact phase asks of the Motion Engine (§IV-B).
+
+    Attributes:
+        standoff: distance (m) from Part A's face up to Part B's along the
+            vertical: P_RC of eq. (14) is P_R raised by eq. (15).
+        sonar_cone: ``(half_angle rad, length m)`` of the UAV's downward range
+            finder beam, a prohibited zone of the local map; ``None``: no zone.
+    """
+
+    standoff: float
+    sonar_cone: tuple[float, float] | None = None
+
+
+@dataclass(frozen=True)
+class TrackingState:
+    """How tracking goes, for the contact phase (blackboard ``<carrier>/tracking``).
+
+    Attributes:
+        t: simulated time (s) of this state.
+        started: time (s) tracking began (the end of the initial encounter).
+        seen: True when the bundle was measured in a frame at most ``max_age`` old.
+        seen_at: time (s) of the last frame in which it was measured (−inf: never).
+        T_M_Q: the estimated UAV pose in M (4×4, :class:`PoseFusion` of the measurements and the
+            robots' odometry), ``None`` before any measurement.
+        p_B_A: Part B's mating face in Part A's frame (m) from that pose and the arm's forward
+            kinematics: ``[2]`` is the axial gap, ``hypot([0], [1])`` the lateral offset.
+        hold_error: distance (m) of that UAV pose from its hold pose in M.
+        camera_offset: distance (m) of the tag plate's centre from the camera's optical axis.
+    """
+
+    t: float
+    started: float
+    seen: bool
+    seen_at: float
+    T_M_Q: np.ndarray | None = field(default=None, repr=False)
+    p_B_A: np.ndarray | None = None
+    hold_error: float = math.inf
+    camera_offset: float = math.inf
+
+    def age(self) -> float:
+        """Seconds since the bundle was last measured."""
+        return self.t - self.seen_at
+
+
+def sonar_cone_zones(zones: ZoneMap, T_M_S: np.ndarray, half_angle: float, length: float, name: str = "sonar") -> None:
+    """Add the cone of a downward range finder to ``zones`` as stacked cylinders (a conservative cover, §IV-B).
+
+    ``T_M_S`` is the sensor in M (beam along its −z). The beam is cut into
+    :data:`SONAR_SEGMENTS` slices, each covered by a cylinder as wide as the
+    cone at the slice's far end.
+    """
+    axis = -T_M_S[:3, 2]
+    R = np.column_stack((T_M_S[:3, 0], T_M_S[:3, 1], axis))
+    slice_length = length / SONAR_SEGMENTS
+    for k in range(SONAR_SEGMENTS):
+        centre = T_M_S[:3, 3] + axis * (k + 0.5) * slice_length
+        radius = max((k + 1) * slice_length * math.tan(half_angle), 1e-3)
+        zones.add_cylinder(f"{name}_{k}", centre, radius, slice_length / 2.0, R)
+
+
+def odometry_pose(uav, frame: CarrierFrame) -> np.ndarray:
+    """The UAV pose in M (4×4) from the two robots' own state estimates (odometry), not from the camera."""
+    p_W, q_W = uav.pose()
+    T = np.eye(4)
+    T[:3, :3] = frame.R_W_M.T @ rotation_matrix(q_W)
+    T[:3, 3] = frame.to_M(p_W)
+    return T
+
+
+class PoseFusion:
+    """The UAV pose in M: odometry between frames, corrected by each eye-in-hand measurement (complementary filter).
+
+    The estimate is ``C · T_odo``, where ``T_odo`` is the UAV pose in M from
+    the two robots' own odometry and ``C`` a correction (a translation and a
+    turn about M's z) that each measurement pulls toward ``T_meas · T_odo⁻¹``
+    with weight ``gain``; the first measurement sets it. The odometry carries
+    the estimate while the marker is hidden (the last centimetres of the
+    contact phase), so only its drift since the last frame adds to the error.
+    A measurement whose correction differs from ``C`` by more than ``gate``
+    (m, or ``gate`` / 0.1 m rad in heading) is an outlier (a tag seen at the
+    image border, a wrong planar-pose branch) and is dropped, unless
+    ``max_rejections`` come in a row: then the estimate itself is wrong and
+    restarts from the measurement.
+
+    Args:
+        gain: weight (0…1] of a new measurement; gate: outlier threshold (m);
+        max_rejections: consecutive outliers that restart the estimate.
+    """
+
+    def __init__(self, gain: float = 0.3, gate: float = 0.03, max_rejections: int = 5):
+        if not 0.0 < gain <= 1.0 or gate <= 0.0 or max_rejections < 1:
+            raise ValueError(f"PoseFusion needs 0 < gain <= 1, gate > 0, max_rejections >= 1; got {gain}, {gate}, {max_rejections}")
+        self.gain, self.gate, self.max_rejections = gain, gate, max_rejections
+        self.offset: np.ndarray | None = None  # correction: translation (m) and heading (rad) in M
+        self.rejections = 0
+
+    def measure(self, T_M_Q_measured: np.ndarray, T_M_Q_odometry: np.ndarray) -> bool:
+        """Fuse one measurement taken when the odometry read ``T_M_Q_odometry``; False when it was rejected."""
+        heading = math.remainder(
+            yaw_of_rotation(T_M_Q_measured[:3, :3]) - yaw_of_rotation(T_M_Q_odometry[:3, :3]), math.tau
+        )
+        turned = rot_z(heading) @ T_M_Q_odometry[:3, 3]
+        offset = np.append(T_M_Q_measured[:3, 3] - turned, heading)
+        if self.offset is not None and self.rejections < self.max_rejections:
+            jump = offset - self.offset
+            jump[3] = math.remainder(jump[3], math.tau)
+            if np.linalg.norm(jump[:3]) > self.gate or abs(jump[3]) * 0.1 > self.gate:
+                self.rejections += 1
+                return False
+            self.offset = self.offset + self.gain * jump
+        else:
+            self.offset = offset
+        self.rejections = 0
+        return True
+
+    def estimate(self, T_M_Q_odometry: np.ndarray) -> np.ndarray | None:
+        """The fused UAV pose in M (4×4) now, ``None`` before the first measurement."""
+        if self.offset is None:
+            return None
+        R = rot_z(self.offset[3])
+        T = np.eye(4)
+        T[:3, :3] = R @ T_M_Q_odometry[:3, :3]
+        T[:3, 3] = R @ T_M_Q_odometry[:3, 3] + self.offset[:3]
+        return T
+
+
+class Track(Skill):
+    """Track the UAV with the arm's Motion Engine from the eye-in-hand camera while the UAV holds its pose in M."""
+
+    class Params(NodeParams):
+        carrier: str = "carrier"
+        """Team member carrying the arm and its eye-in-hand camera (a mobile_manipulator)."""
+        standoff: float = Field(0.40, ge=0.2, le=1.2)
+        """Camera-to-tag-plate distance (m) of the tracking target P_VS (chosen: the bundle fills the view, all tags found at 320×240)."""
+        part_b_M: tuple[float, float, float] = (0.20, 0.0, 0.80)
+        """Part B's position (m) in M held by the UAV: in front of the shoulder axis, within the arm's reach for contact (chosen)."""
+        yaw_M: float = math.pi
+        """UAV heading in M (rad) held while docking: facing the carrier's rear, so the camera sees the bundle during contact."""
+        ee_yaw_M: float = 0.0
+        """End-effector heading in M (rad) of the PBVS target (0: joint 6 mid-range at ``docking_ready``)."""
+        hold_kp: float = Field(2.5, gt=0.0)
+        """Position gain of the UAV's hold in M (1/s; chosen: the stiffest without overshoot at 20 Hz, 3 cm RMS in 2 m/s gusts)."""
+        hold_speed: float = Field(1.0, gt=0.0, le=4.0)
+        """Largest UAV speed relative to the carrier while it takes its hold pose (m/s)."""
+        max_age: float = Field(0.2, gt=0.0)
+        """Oldest measurement (s) the UAV's hold and the engine use; older: the marker counts as unseen."""
+        lost_timeout: float | None = Field(10.0, gt=0.0)
+        """Fail when the marker has not been seen for this long (s); none: never."""
+        contact: bool = True
+        """Read the contact phase's target (``<carrier>/contact_target``, written by ``contact``)."""
+        K_Lp: float = Field(0.005, ge=0.0)
+        """Constant K_Lp of eq. (12) (m/s), L_p = K_Lp·L_C / V_tr: small, the UAV holds still in M (the paper gives no value)."""
+        contact_vicinity: tuple[float, float] = (0.01, 0.02)
+        """Gains (K_a 1/m, K_b) of the vicinity (eq. 7) during contact: the relative pose is held, the end effector only rises."""
+        lead: float = Field(0.15, ge=0.0)
+        """The engine plans on the UAV pose this far ahead (s), from its velocity relative to M: the arm's lag."""
+        fusion_gain: float = Field(0.3, gt=0.0, le=1.0)
+        """Weight of each eye-in-hand measurement in the UAV pose estimate (:class:`PoseFusion`)."""
+        fusion_gate: float = Field(0.03, gt=0.0)
+        """Measurements farther than this (m) from the estimate are outliers (:class:`PoseFusion`)."""
+        f_B: float = Field(4.0, gt=0.0)
+        """Planning-and-optimisation rate f_B (Hz), §IV-A; merge and selection run at f_O = 2·f_B."""
+
+    robot_kinds = ("Quadrotor",)
+    writes = (f"{{carrier}}/{TRACKING}", f"{{carrier}}/{DOCKING_FLAG}")
+
+    @classmethod
+    def read_keys(cls, params: NodeParams, robot: str | None) -> tuple[str, ...]:
+        """The contact target, when the skill follows a contact phase."""
+        return (f"{params.carrier}/{CONTACT_TARGET}",) if params.contact else ()  # type: ignore[attr-defined]
+
+    # ------------------------------------------------------------ life cycle
+    def start(self) -> None:
+        p = self.params
+        self.carrier = carrier_port(self, p.carrier)
+        kinematics = self.carrier.arm_kinematics
+        self.kinematics = kinematics
+        self.observer = EyeInHandObserver.of(self.carrier)
+        self.lidar = self.carrier.sensor("lidar")
+        self.tracking_zones = carrier_zones(kinematics, "mobile_manipulator.urdf")
+        self.tracking_vicinity = VicinityParams()
+        self.engine = MotionEngine(
+            kinematics,
+            self.world.rng_for(f"{p.carrier}/motion_engine"),
+            MotionEngineParams(
+                f_B=p.f_B,
+                selection=SelectionParams(K_Lp=p.K_Lp),
+                target=PbvsTarget(standoff=p.standoff, frame=CAMERA_FRAME),
+            ),
+            zones=self.tracking_zones,
+        )
+        self.p_B_Q = part_b_offset(self.robot)
+        R_M_Q = rot_z(p.yaw_M)
+        self.p_hold_M = np.asarray(p.part_b_M, dtype=float) - R_M_Q @ self.p_B_Q
+        self.T_Q_B = np.eye(4)
+        self.T_Q_B[:3, 3] = self.p_B_Q
+        self.gains = HoldGains(p.hold_kp, p.hold_speed)
+        self.T_M_Q: np.ndarray | None = None  # the estimated UAV pose in M
+        self.fusion = PoseFusion(p.fusion_gain, p.fusion_gate)
+        self.seen_at = self.measured_at = -math.inf
+        self.started = self.world.now
+        self.contact: ContactTarget | None = None
+        self.sonar_T_Q = self._sonar_in_uav()
+        self.write(f"{p.carrier}/{DOCKING_FLAG}", True)
+        self.touches = 0
+        self.context.metric("unintended_contacts", 0, robot=self.robot_name)
+        self.monitor = ContactMonitor(
+            self.world, self.robot.robot, self.carrier.robot, allowed_links_b=[PART_A_LINK], on_contact=self._touched
+        )
+        self.world.add_actor(self.monitor)
+        phase_event(self, "tracking", part_b_M=list(p.part_b_M), standoff=p.standoff)
+
+    def step(self) -> Status:
+        p = self.params
+        now = self.world.now
+        frame = CarrierFrame.of(self.carrier)
+        pose = self.observer.latest_seen(now, p.max_age)
+        T_M_Q_odometry = odometry_pose(self.robot, frame)
+        if pose is not None and self.observer.last_seen.stamp > self.measured_at:  # a new frame: fuse it once
+            self.measured_at = self.observer.last_seen.stamp
+            if self.fusion.measure(pose.T_M_Q, T_M_Q_odometry):
+                self.seen_at = self.measured_at
+        self.T_M_Q = self.fusion.estimate(T_M_Q_odometry)
+        seen = now - self.seen_at <= p.max_age + 1e-9
+        lost_for = now - max(self.seen_at, self.started)
+        if p.lost_timeout is not None and self.contact is None and lost_for > p.lost_timeout:
+            self.feedback_message = f"marker unseen for {p.lost_timeout:.0f} s: tracking lost"
+            return Status.FAILURE
+        self._apply_contact(self.read(f"{p.carrier}/{CONTACT_TARGET}") if p.contact else None)
+        state = TrackingState(now, self.started, seen, self.seen_at)
+        if self.T_M_Q is None:
+            self.carrier.hold_arm()
+        else:
+            q = self.carrier.joint_positions()
+            scan = self.lidar.read()
+            obstacles = None if scan is None else self.engine.scan_from_sensor(scan.data.points_sensor())
+            v_uav_W = np.asarray(self.robot.velocity()[0])
+            T_M_Q_ahead = self.T_M_Q.copy()  # where the UAV will be when the arm gets there (odometry velocity in M)
+            T_M_Q_ahead[:3, 3] += p.lead * frame.R_W_M.T @ (v_uav_W - frame.velocity_of(self.robot.pose()[0]))
+            command = self.engine.update(now, q, T_M_Q_ahead, self.carrier.speed(), float(np.linalg.norm(v_uav_W)), obstacles)
+            self.carrier.set_joint_targets(command.q)
+            state = self._state(now, q, seen)
+            self._log(q, state)
+        self._hold_uav(frame, self.T_M_Q)
+        self.write(f"{p.carrier}/{TRACKING}", state)
+        what = "contact" if self.contact is not None else "tracking"
+        seen = "seen" if state.seen else f"unseen for {state.age():.1f} s"
+        self.feedback_message = f"{what}: marker {seen}, UAV {state.hold_error:.3f} m from its hold pose"
+        return Status.RUNNING
+
+    def finish(self, status: Status) -> None:
+        self.world.remove_actor(self.monitor)
+        docked = self.carrier.docking.docked is self.robot.robot
+        if not docked:  # docked: the flag stays up until the UAV is stored
+            self.write(f"{self.params.carrier}/{DOCKING_FLAG}", False)
+            self.carrier.hold_arm()
+        self.leave_safe()
+
+    # ------------------------------------------------------------- pieces
+    def _touched(self, event: ContactEvent) -> None:
+        """An unintended touch of the UAV and the carrier (anything but Part A): counted and recorded."""
+        self.touches += 1
+        self.context.metric("unintended_contacts", self.touches, robot=self.robot_name)
+        phase_event(self, "unintended_contact", uav_link=event.link_a, carrier_link=event.link_b)
+
+    def _sonar_in_uav(self) -> np.ndarray:
+        """T_Q_S of the UAV's downward range finder (its mount offset; beam along −z)."""
+        T = np.eye(4)
+        sonar = self.robot.sensor("sonar")
+        T[:3, 3] = sonar.offset
+        return T
+
+    def _apply_contact(self, target: ContactTarget | None) -> None:
+        """Aim the engine for the contact phase (Part A at Part B, sonar cone mapped) or for tracking."""
+        p, engine = self.params, self.engine
+        changes: dict = {}
+        if target is None and self.contact is not None:  # cancelled: back to the camera target, lower down
+            engine.zones = self.tracking_zones
+            engine.params = replace(engine.params, vicinity=self.tracking_vicinity)
+            changes.update(standoff=p.standoff, frame=CAMERA_FRAME, aim_Q=PbvsTarget().aim_Q)
+            phase_event(self, "tracking", standoff=p.standoff)
+        elif target is not None:
+            if self.contact is None or self.contact.sonar_cone != target.sonar_cone:
+                engine.zones = self._contact_zones(target)
+            if self.contact is None:
+                engine.params = replace(engine.params, vicinity=VicinityParams(*p.contact_vicinity))
+                changes.update(frame=PART_A_LINK, aim_Q=tuple(self.p_B_Q))
+            changes["standoff"] = max(target.standoff, 0.0)
+        self.contact = target
+        if self.T_M_Q is not None:  # the end effector keeps its heading in M whatever the UAV's
+            changes["yaw_offset"] = p.ee_yaw_M - yaw_of_rotation(self.T_M_Q[:3, :3])
+        if changes:
+            engine.set_target(**changes)
+
+    def _contact_zones(self, target: ContactTarget) -> ZoneMap:
+        """The carrier's zones plus, if asked, the sonar cone of the UAV at its last measured pose in M."""
+        zones = carrier_zones(self.kinematics, "mobile_manipulator.urdf")
+        if target.sonar_cone is not None and self.T_M_Q is not None:
+            half_angle, length = target.sonar_cone
+            sonar_cone_zones(zones, self.T_M_Q @ self.sonar_T_Q, half_angle, length)
+        return zones
+
+    def _state(self, now: float, q: np.ndarray, seen: bool) -> TrackingState:
+        """The tracking state from the last UAV pose and the arm's forward kinematics."""
+        T_M_A = self.kinematics.transform(q, PART_A_LINK)
+        p_B_A = (invert(T_M_A) @ self.T_M_Q @ self.T_Q_B)[:3, 3]
+        T_M_C = self.kinematics.transform(q, CAMERA_FRAME)
+        p_aim_C = (invert(T_M_C) @ self.T_M_Q @ np.append(PbvsTarget().aim_Q, 1.0))[:3]
+        hold_error = float(np.linalg.norm(self.T_M_Q[:3, 3] - self.p_hold_M))
+        offset = float(math.hypot(p_aim_C[0], p_aim_C[1]))
+        return TrackingState(now, self.started, seen, self.seen_at, self.T_M_Q, p_B_A, hold_error, offset)
+
+    def _hold_uav(self, frame: CarrierFrame, T_M_Q: np.ndarray | None) -> None:
+        """Relative hold of the UAV at its pose in M on the estimate (feed-forward only before any measurement)."""
+        p_uav_M = None if T_M_Q is None else T_M_Q[:3, 3]
+        yaw_uav_M = None if T_M_Q is None else yaw_of_rotation(T_M_Q[:3, :3])
+        v_W, yaw_rate = hold_command(p_uav_M, yaw_uav_M, self.p_hold_M, self.params.yaw_M, frame, self.gains)
+        self.robot.command_velocity(*v_W, yaw_rate, frame="world")
+
+    def _log(self, q: np.ndarray, state: TrackingState) -> None:
+        """Metrics of Fig. 20: Part A and (when measured) Part B in M, the camera's centring, the gap."""
+        robot = self.robot_name
+        p_A_M = self.kinematics.forward(q, PART_A_LINK)[0]
+        p_B_M = (self.T_M_Q @ self.T_Q_B)[:3, 3]
+        for k, axis in enumerate("xyz"):
+            self.context.metric("part_a_M", float(p_A_M[k]), robot=robot, axis=axis)
+            if state.seen:
+                self.context.metric("part_b_M", float(p_B_M[k]), robot=robot, axis=axis)
+        if state.seen:
+            self.context.metric("camera_offset", state.camera_offset, robot=robot)
+        self.context.metric("docking_gap", float(np.linalg.norm(state.p_B_A)), robot=robot)
