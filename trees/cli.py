@@ -26,7 +26,7 @@ import marsupial
 from .errors import MissionError
 
 #: mission run by ``marsupial run`` without a MISSION argument
-DEFAULT_MISSION = "landing_circular"
+DEFAULT_MISSION = "usar_docking"
 
 _err = Console(stderr=True)
 

@@ -262,7 +262,8 @@ class _Compiler:
                     )
 
     def listened_commands(self) -> set[str]:
-        return {n.params.command for n, _ in self.leaves if isinstance(n, OperatorSaid)}
+        said = {n.params.command for n, _ in self.leaves if isinstance(n, OperatorSaid)}
+        return said | {c for n, _ in self.leaves for c in getattr(n, "operator_commands", ())}  # skills that ask
 
     def check_operator_script(self, listens: set[str]) -> None:
         """Scripted operator commands must be control commands or listened to by the tree."""

@@ -1,8 +1,8 @@
 """Skills of Palafox et al. (2019): take off from, track, land on and re-localise a moving platform.
 
-The UAV skills (an ``ardrone2`` and the ``summit_xl`` carrying the red
-platform) share one :class:`~.tracking.TrackingModule` through the blackboard
-key ``<uav>/tracking``: the detection (Algorithm 1), the tracker (§3.3) and
+The skills of the UAV (an ``ardrone2`` landing on the red platform of a
+``summit_xl``) share one :class:`~.tracking.TrackingModule` through the
+blackboard key ``<uav>/tracking``: the detection (Algorithm 1), the tracker (§3.3) and
 the state machine's clocks carry over from one skill to the next.
 
 - ``takeoff`` — landed → taking off: motors on, climb at 1 m/s to the 4 m

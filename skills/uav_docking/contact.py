@@ -24,8 +24,9 @@ Phases (``state_change`` events with ``phase``):
   farther than ``align_tolerance`` from Part A's axis (the supervision: no
   push on a misaligned UAV). The UAV's downward sonar cone is a prohibited
   zone of the local map (§IV-B), so the end effector never enters the beam;
-- ``capture`` — the faces touch (D_c = 0 mm, §IV-C): the electromagnet pulls
-  Part B into full contact (Fig. 12b);
+- ``capture`` — Part A holds still within D_c of Part B (the approach stops
+  at ``rest_gap``): the electromagnet pulls Part B into contact, closing the
+  gap to 0 mm (§IV-C, Fig. 12b);
 - ``locking`` — the servo levers close on Part B's ring (Fig. 12c); once
   locked the docking device stops the UAV's motors (``on_docked``) and the
   skill succeeds (``locked``, with the metrics ``contact_time`` and
@@ -58,6 +59,8 @@ from .relative_hold import PART_A_LINK
 from .team import DOCKING_FLAG, carrier_port, phase_event
 from .track import CONTACT_TARGET, TRACKING, ContactTarget, TrackingState
 
+CAPTURE_TIME = 1.0  # s the magnet may take to bring Part B into contact before the capture is retried
+SETTLED_SPEED = 0.01  # m/s: Part A counts as holding still below Part B (the magnet is not switched on a moving arm)
 K_C = 0.18  # m, k_c of eq. (15): the paper prints no value; chosen so a 0.35 m gap closes in 6 s (2.6 cm/s at the end)
 
 
@@ -88,8 +91,10 @@ class Contact(Skill):
         """Gap (m) the approach holds until Part B is within ``align_tolerance`` of Part A's axis (no push on a misaligned UAV)."""
         align_tolerance: float = Field(0.008, gt=0.0)
         """Lateral offset (m) of Part B from Part A's axis within which the last ``align_gap`` is closed (inside the magnet's 10 mm reach)."""
-        D_c: float = Field(0.0, ge=0.0)
-        """Gap (m) at which the securing sequence starts, §IV-C ("D_c = 0 mm": the faces touch, the device's contact distance)."""
+        D_c: float = Field(0.006, gt=0.0)
+        """Gap D_c (m) at which the electromagnet is switched on, §IV-C (within its 10 mm reach; it closes the gap to 0 mm)."""
+        rest_gap: float = Field(0.005, ge=0.0)
+        """Gap (m) at which Part A stops below Part B (inside D_c): the magnet, not the arm, makes the contact."""
         sonar_cone: bool = True
         """Map the UAV's downward range-finder cone as a prohibited zone (§IV-B)."""
         timeout: float = Field(30.0, gt=0.0)
@@ -100,6 +105,11 @@ class Contact(Skill):
     robot_kinds = ("Quadrotor",)
     reads = (f"{{carrier}}/{TRACKING}",)
     writes = (f"{{carrier}}/{CONTACT_TARGET}", f"{{carrier}}/{DOCKING_FLAG}")
+
+    @property
+    def operator_commands(self) -> tuple[str, ...]:
+        """The operator command this skill consumes (the compiler accepts it in a mission's operator script)."""
+        return () if self.params.authorization is None else (self.params.authorization,)
 
     # ------------------------------------------------------------ life cycle
     def start(self) -> None:
@@ -133,7 +143,7 @@ class Contact(Skill):
 
     # ------------------------------------------------------------- phases
     def request_authorization(self, why: str) -> None:
-        """Enter ``authorization_requested``: ask the operator (an event and a log line), or authorize at once."""
+        """Enter ``authorization_requested``: ask the operator (a ``state_change`` event), or authorize at once."""
         self.t0: float | None = None
         self.settled_since: float | None = None
         command = self.params.authorization
@@ -173,6 +183,7 @@ class Contact(Skill):
             return Status.RUNNING
         self.phase, self.t0, self.s0 = "approach", now, float(state.p_B_A[2])
         self.t_c, self.last_t = 0.0, now
+        self.last_axial, self.last_tick = math.inf, now
         self.cone = None  # the sonar beam, from the UAV down to the floor (§IV-B)
         if p.sonar_cone:
             height = float(self.robot.pose()[0][2]) - self.world.scene.floor.height
@@ -197,16 +208,22 @@ class Contact(Skill):
         if aligned or self.s0 - p.k_c * math.log(self.t_c + 1.0) > p.align_gap:  # the contact clock t_c
             self.t_c += now - self.last_t
         self.last_t = now
-        standoff = max(self.s0 - p.k_c * math.log(self.t_c + 1.0), 0.0)  # eq. (15) as the gap P_RC leaves
+        standoff = max(self.s0 - p.k_c * math.log(self.t_c + 1.0), p.rest_gap)  # eq. (15) as the gap P_RC leaves
         if not aligned:
             standoff = max(standoff, p.align_gap)
         distance = self.device.distance_to(uav)
         axial = self.device.offset_to(uav)[0]
-        touching = axial <= max(p.D_c, self.device.contact_distance) and distance <= self.device.capture_distance
-        if self.phase == "approach" and touching:
-            self.device.magnet_on()  # Fig. 12b: the faces touch, the magnet forces the initial contact
-            self.phase = "capture"
+        settled = abs(axial - self.last_axial) <= SETTLED_SPEED * max(now - self.last_tick, 1e-9)
+        self.last_axial, self.last_tick = axial, now
+        within = axial <= p.D_c and distance <= self.device.capture_distance
+        if self.phase == "approach" and within and settled:
+            self.device.magnet_on()  # Fig. 12b: Part A holds still at D_c, the magnet forces the initial contact
+            self.phase, self.captured_at = "capture", now
             phase_event(self, "capture", t_c=round(self.t_c, 3), distance=round(distance, 4))
+        elif self.phase == "capture" and now - self.captured_at > CAPTURE_TIME:  # off-centre on the face: try again
+            self.device.magnet_off()
+            self.phase = "approach"
+            phase_event(self, "capture_failed", distance=round(distance, 4))
         elif self.phase != "approach" and distance > 2.0 * self.device.capture_distance:  # Part B got away
             self.device.magnet_off()
             self.phase = "approach"

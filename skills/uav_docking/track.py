@@ -4,14 +4,17 @@ Every tick (Fig. 4):
 
 1. the eye-in-hand frame is measured once for every skill that looks at it
    (:class:`~.observer.EyeInHandObserver`: AprilTag bundle → P_Q^{C_A} by
-   solvePnP → P_Q^M by eq. (1));
+   solvePnP → P_Q^M by eq. (1)) and fused with the two robots' odometry
+   (:class:`PoseFusion`): the odometry carries the estimate between frames
+   and while the marker is hidden, each frame corrects it, outliers (a tag
+   at the image border, a wrong planar-pose branch) are dropped;
 2. the Motion Engine (:class:`~.engine.MotionEngine`: cord, vicinity, local
    map from the LiDAR, RRT* graph over the IK engine at f_B = 4 Hz; PBVS,
-   V_tr, L_p and P_R at f_O = 8 Hz) turns P_Q^M into joint set-points for the
-   arm's PIDs;
+   V_tr, L_p and P_R at f_O = 8 Hz) turns the estimate, ``lead`` seconds
+   ahead (the arm's lag), into joint set-points for the arm's PIDs;
 3. the UAV holds a reachable pose in the manipulator frame M — Part B at
    ``part_b_M``, facing ``yaw_M`` — by the relative-hold law of
-   :mod:`.relative_hold` on the same measurement ("the UAV pose is being
+   :mod:`.relative_hold` on the same estimate ("the UAV pose is being
    controlled within M coordinates", §IV-A), whatever the carrier does.
 
 While tracking, the PBVS target P_VS puts the camera ``standoff`` straight
@@ -23,20 +26,22 @@ bundle stays in view during most of the contact phase.
 
 The contact phase (:mod:`.contact`, run beside this skill) writes a
 :class:`ContactTarget` on the blackboard (``<carrier>/contact_target``):
-Part A is then aimed at Part B from the standoff of eq. (15), and the UAV's
-downward sonar cone enters the local map as a prohibited zone. Without a
-contact target (none yet, or a cancelled contact) the engine tracks with the
-camera target: after a cancellation the end effector drops back to the
-tracking standoff, which brings the bundle back into view (§IV-B).
+Part A is then aimed at Part B from the standoff of eq. (15), the vicinity
+narrows (``contact_vicinity``: the relative pose is held, the end effector
+only rises) and the UAV's downward sonar cone enters the local map as a
+prohibited zone. Without a contact target (none yet, or a cancelled
+contact) the engine tracks with the camera target: after a cancellation the
+end effector drops back to the tracking standoff, which brings the bundle
+back into view (§IV-B).
 
-Between measurements (the marker hidden) the UAV keeps moving with the
-carrier (feed-forward of the hold law) and, within the contact phase's blind
-range of Part B, the engine keeps planning on the last measured pose — the
-UAV holds still in M — so the final centimetres, where the camera is too
-close to see the tags, are flown on that estimate.
+Safety: a :class:`~marsupial.world.contacts.ContactMonitor` counts every
+touch of the UAV with a carrier link other than Part A while the skill runs
+(metric ``unintended_contacts``, event ``unintended_contact``).
 
 Blackboard: writes ``<carrier>/tracking`` (:class:`TrackingState`, for the
-contact phase) and reads ``<carrier>/contact_target`` (with ``contact``).
+contact phase) and the docking flag; reads ``<carrier>/contact_target``
+(with ``contact``). Metrics (Fig. 20): ``part_a_M`` and ``part_b_M`` (label
+``axis``), ``camera_offset``, ``docking_gap``.
 
 Frames: manipulator frame M (``arm_base``), metres, radians, seconds.
 """
@@ -125,7 +130,7 @@ def sonar_cone_zones(zones: ZoneMap, T_M_S: np.ndarray, half_angle: float, lengt
     cone at the slice's far end.
     """
     axis = -T_M_S[:3, 2]
-    R = np.column_stack((T_M_S[:3, 0], T_M_S[:3, 1], axis))
+    R = np.column_stack((T_M_S[:3, 0], -T_M_S[:3, 1], axis))  # turned half a turn about x: z along the beam
     slice_length = length / SONAR_SEGMENTS
     for k in range(SONAR_SEGMENTS):
         centre = T_M_S[:3, 3] + axis * (k + 0.5) * slice_length

@@ -241,7 +241,10 @@ class DockingDevice:
             d = float(np.linalg.norm(gap))
             if d > self.capture_distance:
                 continue
-            direction = gap / d if d > 1e-9 else -R_a[:, 2]
+            # faces touching: the pot magnet pulls along its axis onto its face (the centre-to-centre
+            # direction turns sideways there, and its 100 N-class pull would fling the UAV off the face)
+            touching = float(-gap @ R_a[:, 2]) <= self.contact_distance or d <= 1e-9
+            direction = -R_a[:, 2] if touching else gap / d
             force = self.holding_force / (1.0 + d / self.force_length) ** 2 * direction
             on_b, on_a = force.tolist(), (-force).tolist()  # equal and opposite
             pybullet.applyExternalForce(

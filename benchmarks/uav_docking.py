@@ -1,0 +1,587 @@
+"""The VTOL-UAV docking system of Narváez et al. (2020), side by side with the paper: Tables II–III, Figs. 13, 15, 20.
+
+    python benchmarks/uav_docking.py [--quick] [--workers 2] [--runs DIR] [--encounters 100]
+                                     [--out benchmarks/out/uav_docking.json] [--report docs/results/uav_docking.md]
+
+Every mission runs through the campaign runner (``trees/campaign.py``) and
+every figure is computed from the MCAP logs (``trees/replay.py``):
+
+1. §V-A — ``usar_docking`` (the default mission of ``marsupial run``) twice,
+   with the 12.6 V / 3.5 A charger on Part A and without
+   (``team.carrier.options.docking.charger=false``): docking times (from the
+   operator's request, and from the end of the initial encounter, which is
+   the paper's tracking + contact), storage times, UAV energy consumed and
+   recovered (from the battery's state of charge, 1 Hz), battery at the end,
+   distances and operation times (Tables II–III), the trajectories over the
+   map (Fig. 13), the battery over the mission (Fig. 15) and the docking
+   tracking (Fig. 20).
+2. Robustness — ``benchmarks/missions/docking_encounter.yaml``: 100 docking
+   encounters, 20 combinations of a random UAV start within 1 m of the
+   meeting point (5) × a random carrier speed ≤ 0.5 m/s on a 0.05 rad/s arc
+   (4), each with 5 seeds (gust directions and timing) of 2 m/s gusts.
+   Success = UAV locked and stored within 60 s; unintended contacts =
+   ``world/contacts.py`` ContactMonitor events of the UAV with any carrier
+   link but Part A (installed by ``track`` for tracking and contact).
+3. Speed — the Motion Engine's planning cycle (p50/p95) and IK engine solves/s
+   (1 vs 2 workers), measured by ``benchmarks/motion_engine.py``; the
+   eye-in-hand camera's cost and the bundle detection at 640×480 and
+   320×240 at the docking distances (0.3–1.2 m); the real-time factor of
+   ``marsupial run usar_docking`` (run alone, no log, as the CLI runs it).
+
+``--quick``: 20 encounters (4 starts × 1 speed × 5 seeds) and quick speed
+figures. Writes the JSON, the Markdown report with PNG plots under
+``docs/results/img/``, prints the tables; exit code 1 when a target is missed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import platform
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from marsupial.skills.uav_docking.pose import UavPoseMeasurement
+from marsupial.trees.campaign import run_campaign
+from marsupial.trees.replay import RunLog, read_log
+from marsupial.trees.runner import run_mission
+from marsupial.world import World
+from marsupial.world.robots.quadrotor import BEBOP2
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import motion_engine  # noqa: E402 (the planning-cycle and IK measurements, next to this script)
+from bench_common import print_tables  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+DEFAULT_OUT = ROOT / "benchmarks" / "out" / "uav_docking.json"
+DEFAULT_REPORT = ROOT / "docs" / "results" / "uav_docking.md"
+ENCOUNTER = ROOT / "benchmarks" / "missions" / "docking_encounter.yaml"
+MISSION = "usar_docking"
+CAPACITY_MAH = BEBOP2.battery.capacity_mAh
+
+PAPER = {  # Narváez et al. 2020, Tables II-III and §V-A (simulation)
+    "docking_s": [22.2236, 26.2709],
+    "storage_s": [62.254, 88.7853],
+    "mission_s": 723.25,
+    "carrier_distance_m": 68.0523,
+    "uav_distance_m": 112.8383,
+    "uav_operation_s": 572.1461,
+    "consumed_mAh": 986.2606,
+    "recovered_mAh": 185.6458,
+    "battery_without_percent": 63.47,
+    "battery_with_percent": 70.34,
+}
+TARGETS = {"docking_s": 15.0, "encounter_successes": 98, "rtf": 3.0, "cycle_p95_ms": 25.0, "ik_per_s": 5000.0}
+MEETING_UAV = np.array([-0.11, 0.0, 1.53])  # the encounter mission's meeting point (UAV base, world, m)
+
+
+# ------------------------------------------------------------------ USAR mission
+def phase_events(log: RunLog, phase: str, skill: str | None = None) -> list[dict[str, Any]]:
+    """The ``state_change`` events of ``phase`` (of ``skill`` if given), in time order."""
+    return [e for e in log.events_of("state_change") if e.get("phase") == phase and (skill is None or e.get("skill") == skill)]
+
+
+def intervals(starts: list[float], ends: list[float], stop: float) -> list[tuple[float, float]]:
+    """Pair each start with the first end after it (``stop`` if none)."""
+    out = []
+    for s in starts:
+        later = [e for e in ends if e > s]
+        out.append((s, later[0] if later else stop))
+    return out
+
+
+def path_length(xyz: np.ndarray, t: np.ndarray, skip: list[tuple[float, float]] = ()) -> float:
+    """Horizontal length (m) of a sampled path, leaving out the steps inside ``skip`` intervals."""
+    steps = np.linalg.norm(np.diff(xyz[:, :2], axis=0), axis=1)
+    keep = np.ones(len(steps), dtype=bool)
+    for a, b in skip:
+        keep &= ~((t[1:] > a) & (t[:-1] < b))
+    return float(steps[keep].sum())
+
+
+def mission_stats(log: RunLog) -> dict[str, Any]:
+    """Tables II-III of one ``usar_docking`` run: dockings, storage, energy, distances, times."""
+    end = float(log.sim_time)
+    rendezvous = [e["t"] for e in log.events_of("state_change") if e.get("skill") == "rendezvous" and e.get("status") == "RUNNING"]
+    dockings = []
+    for locked in phase_events(log, "locked"):
+        requested = max(t for t in rendezvous if t <= locked["t"])
+        approach = max(e["t"] for e in phase_events(log, "approach", "contact") if e["t"] <= locked["t"])
+        dockings.append({
+            "requested_at_s": requested,
+            "locked_at_s": locked["t"],
+            "request_to_lock_s": locked["t"] - requested,
+            "encounter_to_lock_s": locked["docking_time"],
+            "contact_s": locked["t"] - approach,
+        })
+    released = [e["t"] for e in phase_events(log, "released", "deploy")]
+    locks = [d["locked_at_s"] for d in dockings]
+    at_start = [0.0] if released and (not locks or released[0] < locks[0]) else []  # the run began with it stored
+    docked = intervals(at_start + locks, released, end)
+    stored = intervals(at_start + [e["t"] for e in phase_events(log, "stored", "store")], released, end)
+    t_soc, soc = log.metric("battery_soc", robot="uav")
+    delta = np.diff(soc) * CAPACITY_MAH
+    t_c, xyz_c = log.poses("carrier")
+    t_u, xyz_u = log.poses("uav")
+    operators = [(e["t"], e["command"], e.get("why", "")) for e in log.events_of("operator")]
+    found = phase_events(log, "target_found")
+    return {
+        "outcome": log.outcome,
+        "mission_s": end,
+        "dockings": dockings,
+        "storage": [{"from_s": a, "to_s": b, "duration_s": b - a} for a, b in stored],
+        "docked": docked,
+        "consumed_mAh": float(-delta[delta < 0].sum()),
+        "recovered_mAh": float(delta[delta > 0].sum()),
+        "battery_end_percent": 100.0 * float(soc[-1]),
+        "battery": {"t": t_soc.tolist(), "soc": soc.tolist()},
+        "carrier_distance_m": path_length(xyz_c, t_c),
+        "uav_distance_m": path_length(xyz_u, t_u, docked),
+        "uav_operation_s": end - sum(b - a for a, b in docked),
+        "unintended_contacts": int(np.max(log.metric("unintended_contacts", robot="uav")[1], initial=0)),
+        "operator": operators,
+        "target_found_s": found[0]["t"] if found else None,
+    }
+
+
+def run_usar(runs: Path, workers: int) -> tuple[dict[str, Any], dict[str, RunLog]]:
+    """The mission with and without charging, in parallel (one campaign, two combinations)."""
+    out = runs / "usar"
+    run_campaign(MISSION, 1, out, vary={"team.carrier.options.docking.charger": ["true", "false"]},
+                 workers=workers, keep_logs="all")
+    records = json.loads((out / "trials.json").read_text())
+    logs, stats = {}, {}
+    for record in records:
+        label = "with_charging" if record["params"]["team.carrier.options.docking.charger"] == "true" else "without_charging"
+        logs[label] = read_log(record["log"])
+        stats[label] = mission_stats(logs[label])
+        stats[label]["wall_time_s"] = record["wall_time"]
+    return stats, logs
+
+
+# ------------------------------------------------------------------ encounters
+def encounter_grid(quick: bool, seed: int = 20) -> dict[str, list[str]]:
+    """Random UAV starts within 1 m of the meeting point (heading too) and carrier speeds ≤ 0.5 m/s."""
+    rng = np.random.default_rng(seed)
+    starts = []
+    for _ in range(4 if quick else 5):
+        while True:  # within 1 m, not below 0.3 m under the meeting point (the arm is there)
+            offset = rng.uniform(-1.0, 1.0, 3)
+            if np.linalg.norm(offset) <= 1.0 and offset[2] >= -0.3:
+                break
+        x, y, z = MEETING_UAV + offset
+        starts.append(f"[{x:.3f}, {y:.3f}, {z:.3f}, {rng.uniform(-math.pi, math.pi):.3f}]")
+    speeds = [f"{v:.3f}" for v in rng.uniform(0.05, 0.5, 1 if quick else 4)]
+    return {"team.uav.pose": starts, "carrier_speed": speeds}
+
+
+def run_encounters(runs: Path, workers: int, quick: bool) -> dict[str, Any]:
+    """The randomized encounters: success, docking times, unintended contacts."""
+    out = runs / "encounters"
+    grid = encounter_grid(quick)
+    seeds = 5
+    summary = run_campaign(str(ENCOUNTER), seeds, out, vary=grid, workers=workers, keep_logs="failed")
+    records = json.loads((out / "trials.json").read_text())
+    times = [r["metrics"]["docking_time[uav]"] for r in records if r["success"] and "docking_time[uav]" in r["metrics"]]
+    touches = [r["metrics"].get("unintended_contacts[uav]", 0.0) for r in records]
+    return {
+        "trials": len(records),
+        "successes": summary["successes"],
+        "success_rate_ci95": summary["success_rate_ci95"],
+        "outcomes": summary["outcomes"],
+        "unintended_contacts": int(sum(touches)),
+        "trials_with_contacts": int(sum(t > 0 for t in touches)),
+        "encounter_to_lock_s": {
+            "median": statistics.median(times) if times else None,
+            "p95": float(np.percentile(times, 95)) if times else None,
+            "max": max(times) if times else None,
+        },
+        "sim_time_median_s": summary["median_sim_time"],
+        "grid": grid,
+        "seeds": seeds,
+        "failures": [{"seed": r["seed"], "params": r["params"], "outcome": r["outcome"], "message": r["message"]}
+                     for r in records if not r["success"]],
+    }
+
+
+# ------------------------------------------------------------------ speed
+def camera_and_detection(frames: int) -> dict[str, Any]:
+    """Eye-in-hand render and bundle detection (ms/frame, found, position error) by resolution and distance."""
+    results: dict[str, Any] = {}
+    for width, height in ((640, 480), (320, 240)):
+        rows = {}
+        with World(scene="usar_building", seed=1) as world:
+            settings = {"eye_in_hand": {"width": width, "height": height, "rate_hz": 240.0}}
+            carrier = world.add_robot("mobile_manipulator", "carrier", pose=[-5, 0, 0], arm_pose="docking_ready", sensors=settings)
+            uav = world.add_robot("bebop2", "uav", pose=[-5, 0, 2.0, math.pi])
+            measurement = UavPoseMeasurement(carrier.arm_kinematics, carrier.eye_in_hand.K)
+            p_M_W = np.asarray(carrier.arm_base_pose()[0])
+            p_C_M, _ = carrier.arm_kinematics.forward(carrier.joint_positions(), "eye_in_hand")
+            for distance in (0.3, 0.4, 0.6, 0.8, 1.0, 1.2):
+                render, detect, errors = [], [], []
+                for k in range(frames):
+                    jitter = 0.01 * np.array([math.cos(k), math.sin(k), 0.0])
+                    p_uav_W = p_M_W + p_C_M + np.array([0.005, 0.0, distance + 0.034]) + jitter  # plate centre over the camera
+                    world.bullet.resetBasePositionAndOrientation(uav.body_id, p_uav_W.tolist(), [0, 0, 1, 0])
+                    world.step(1 / 240)
+                    t0 = time.perf_counter()
+                    frame = carrier.eye_in_hand.read().data
+                    t1 = time.perf_counter()
+                    pose = measurement.measure(frame.rgb, carrier.joint_positions())
+                    t2 = time.perf_counter()
+                    render.append(t1 - t0)
+                    detect.append(t2 - t1)
+                    if pose is not None:
+                        errors.append(float(np.linalg.norm(pose.p_uav_M - (p_uav_W - p_M_W))))
+                rows[f"{distance:.1f}"] = {
+                    "render_ms": 1e3 * statistics.median(render),
+                    "detect_ms": 1e3 * statistics.median(detect),
+                    "found_percent": 100.0 * len(errors) / frames,
+                    "error_mm": 1e3 * statistics.median(errors) if errors else None,
+                }
+        results[f"{width}x{height}"] = rows
+    return results
+
+
+def real_time_factor() -> dict[str, Any]:
+    """``marsupial run usar_docking`` as the CLI runs it (no log), alone on the machine."""
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
+    result = run_mission(MISSION, progress=False)
+    return {"outcome": result.outcome, "sim_time_s": result.sim_time, "wall_time_s": result.wall_time,
+            "rtf": result.real_time_factor, "load_average_before": load}
+
+
+# ------------------------------------------------------------------ plots
+def plots(stats: dict[str, Any], logs: dict[str, RunLog], img: Path) -> dict[str, str]:
+    """Figs. 13, 15 and 20 as PNGs in ``img``; returns their paths relative to the report."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    img.mkdir(parents=True, exist_ok=True)
+    names: dict[str, str] = {}
+    run = stats["with_charging"]
+    log = logs["with_charging"]
+
+    def save(fig: Any, name: str) -> None:
+        fig.tight_layout()
+        fig.savefig(img / name, dpi=110)
+        plt.close(fig)
+        names[name] = f"img/{name}"
+
+    def shade(ax: Any) -> None:
+        for a, b in run["docked"]:
+            ax.axvspan(a, b, color="0.85", lw=0)
+
+    # Fig. 13: the map and the paths; grey where the UAV was on the carrier
+    fig, ax = plt.subplots(figsize=(9, 6.2))
+    with World(scene="usar_building") as world:
+        scene = world.scene
+        for obj in scene.objects.values():
+            lo, hi = world.bullet.getAABB(obj.body_id)
+            if lo[2] > 1.5:  # door lintels: above the flight
+                continue
+            color = {"wall": "0.35", "door_frame": "0.35", "target": "tab:orange"}.get(
+                next((t for t in ("wall", "door_frame", "target") if t in obj.tags), ""), "0.65")
+            ax.add_patch(plt.Rectangle(lo[:2], hi[0] - lo[0], hi[1] - lo[1], color=color, lw=0))
+        area = scene.zone("target_area")
+        ax.add_patch(plt.Circle(area.center[:2], 1.2, fill=False, color="gold", lw=2.5, label="target area (operator)"))
+        guide = scene.path("operator_path")
+    ax.plot(guide[:, 0], guide[:, 1], ":", color="tab:blue", lw=1.5, label="guide path γ_mm")
+    t_c, xyz_c = log.poses("carrier")
+    t_u, xyz_u = log.poses("uav")
+    ax.plot(xyz_c[:, 0], xyz_c[:, 1], color="tab:blue", lw=2, label="carrier γ'_mm")
+    flying = np.ones(len(t_u), dtype=bool)
+    for a, b in run["docked"]:
+        flying &= ~((t_u >= a) & (t_u <= b))
+        on = (t_c >= a) & (t_c <= b)
+        ax.plot(xyz_c[on, 0], xyz_c[on, 1], color="0.55", lw=6, alpha=0.6, solid_capstyle="butt")
+    xy = np.where(flying[:, None], xyz_u[:, :2], np.nan)
+    ax.plot(xy[:, 0], xy[:, 1], color="tab:red", lw=1.2, label="UAV γ_UAV")
+    ax.plot([], [], color="0.55", lw=6, alpha=0.6, label="UAV stored on the carrier")
+    for d in run["dockings"]:
+        i = np.searchsorted(t_c, d["locked_at_s"])
+        ax.plot(*xyz_c[min(i, len(t_c) - 1), :2], "k*", ms=12)
+    ax.plot([], [], "k*", ms=12, label="docking (lock)")
+    ax.set_aspect("equal")
+    ax.set_xlim(-15.5, 15.5)
+    ax.set_ylim(-10.5, 10.5)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title("usar_docking: paths (cf. Narváez et al. 2020, Fig. 13)")
+    ax.legend(loc="upper left", fontsize=8, ncol=2)
+    save(fig, "uav_docking_paths.png")
+
+    # Fig. 15: battery over the mission, with and without charging
+    fig, ax = plt.subplots(figsize=(8, 3.8))
+    shade(ax)
+    for label, color in (("with_charging", "tab:red"), ("without_charging", "tab:blue")):
+        b = stats[label]["battery"]
+        ax.plot(b["t"], 100.0 * np.asarray(b["soc"]), color=color, label=label.replace("_", " "))
+    ax.set_xlabel("mission time (s)")
+    ax.set_ylabel("UAV battery (%)")
+    ax.set_title("UAV battery (cf. Fig. 15); grey: UAV docked / stored")
+    ax.legend()
+    save(fig, "uav_docking_battery.png")
+
+    # Fig. 20: Part B (marker side) and Part A (end effector) in M during each docking, and the gap
+    dockings = run["dockings"]
+    fig, axes = plt.subplots(2, len(dockings), figsize=(5.5 * len(dockings), 6), squeeze=False)
+    for k, d in enumerate(dockings):
+        a, b = d["locked_at_s"] - d["encounter_to_lock_s"], d["locked_at_s"]
+        for axis, color in zip("xyz", ("tab:green", "tab:purple", "tab:brown")):
+            t_a, v_a = log.metric("part_a_M", robot="uav", axis=axis)
+            t_b, v_b = log.metric("part_b_M", robot="uav", axis=axis)
+            sa, sb = (t_a >= a) & (t_a <= b), (t_b >= a) & (t_b <= b)
+            axes[0, k].plot(t_a[sa] - a, v_a[sa], color=color, lw=2, label=f"Part A {axis}")
+            axes[0, k].plot(t_b[sb] - a, v_b[sb], ".", color=color, ms=3, label=f"Part B {axis} (measured)")
+        t_g, gap = log.metric("docking_gap", robot="uav")
+        sg = (t_g >= a) & (t_g <= b)
+        axes[1, k].plot(t_g[sg] - a, 100.0 * gap[sg], color="k", label="|P_B − P_A| (estimate)")
+        t_o, offset = log.metric("camera_offset", robot="uav")
+        so = (t_o >= a) & (t_o <= b)
+        axes[1, k].plot(t_o[so] - a, 100.0 * offset[so], ".", color="tab:red", ms=3, label="marker off the optical axis")
+        axes[0, k].set_title(f"docking {k + 1}: {d['encounter_to_lock_s']:.1f} s from the encounter to the lock")
+        axes[0, k].set_ylabel("position in M (m)")
+        axes[1, k].set_ylabel("cm")
+        axes[1, k].set_xlabel("time since the initial encounter (s)")
+        axes[0, k].legend(fontsize=7, ncol=2, loc="center right")
+        axes[1, k].legend(fontsize=7, loc="upper right")
+    save(fig, "uav_docking_tracking.png")
+    return names
+
+
+# ------------------------------------------------------------------ report
+def verdicts(results: dict[str, Any]) -> dict[str, tuple[bool, str]]:
+    """Each target: (met, measured text)."""
+    run = results["usar"]["with_charging"]
+    times = [d["request_to_lock_s"] for d in run["dockings"]]
+    enc = results["encounters"]
+    cycle = results["planning_cycle"]
+    ik = results["ik_engine"]["closed_form"]
+    ik_one = max(r["1_worker"]["solves_per_s"] for r in ik.values())
+    saving = run["recovered_mAh"]
+    return {
+        "docking times ≤ 15 s": (len(times) >= 2 and max(times) <= TARGETS["docking_s"],
+                                 " / ".join(f"{t:.1f} s" for t in times) + " (request to lock)"),
+        "charging saves ≥ the paper's 185.6 mAh": (saving >= PAPER["recovered_mAh"], f"{saving:.0f} mAh"),
+        f"encounters ≥ {TARGETS['encounter_successes']}/100, no unintended contact": (
+            enc["successes"] * 100 >= TARGETS["encounter_successes"] * enc["trials"] and enc["unintended_contacts"] == 0,
+            f"{enc['successes']}/{enc['trials']}, {enc['unintended_contacts']} contacts"),
+        "planning cycle p95 ≤ 25 ms (one core), ≥ 300 vertices": (
+            cycle["p95_ms"] <= TARGETS["cycle_p95_ms"] and cycle["min_valid_vertices"] >= 300,
+            f"p95 {cycle['p95_ms']:.1f} ms, min {cycle['min_valid_vertices']} vertices"),
+        "IK engine ≥ 5,000 solves/s on one core": (ik_one >= TARGETS["ik_per_s"], f"{ik_one:,.0f} /s"),
+        "marsupial run usar_docking ≥ 3× real time": (results["rtf"]["rtf"] >= TARGETS["rtf"], f"{results['rtf']['rtf']:.1f}×"),
+    }
+
+
+def _f(value: float | None, digits: int = 1) -> str:
+    return "—" if value is None else f"{value:.{digits}f}"
+
+
+def tables(results: dict[str, Any]) -> list[tuple[str, list[str], list[list[str]]]]:
+    """The report's tables: (title, header, rows)."""
+    w, wo = results["usar"]["with_charging"], results["usar"]["without_charging"]
+    d = w["dockings"]
+    table_ii = [
+        ["Docking 1 (request → lock / encounter → lock)", _f(PAPER["docking_s"][0]),
+         f"{_f(d[0]['request_to_lock_s'])} / {_f(d[0]['encounter_to_lock_s'])}" if d else "—"],
+        ["Docking 2 (request → lock / encounter → lock)", _f(PAPER["docking_s"][1]),
+         f"{_f(d[1]['request_to_lock_s'])} / {_f(d[1]['encounter_to_lock_s'])}" if len(d) > 1 else "—"],
+        ["Contact phase 1 / 2 (eq. 15, approach → lock)", "—", " / ".join(_f(x["contact_s"]) for x in d)],
+    ] + [[f"Storage {k + 1}", _f(PAPER["storage_s"][k]) if k < 2 else "—", _f(s["duration_s"])]
+         for k, s in enumerate(x for x in w["storage"] if x["from_s"] > 0.0)] + [
+        ["Total mission time (target found)", _f(PAPER["mission_s"], 2), _f(w["mission_s"])],
+    ]
+    table_iii = [
+        ["Carrier distance travelled (m)", _f(PAPER["carrier_distance_m"]), _f(w["carrier_distance_m"])],
+        ["UAV distance flown (m)", _f(PAPER["uav_distance_m"]), _f(w["uav_distance_m"])],
+        ["Carrier operation time (s)", _f(PAPER["mission_s"], 2), _f(w["mission_s"])],
+        ["UAV operation (flight) time (s)", _f(PAPER["uav_operation_s"]), _f(w["uav_operation_s"])],
+        ["UAV energy consumed (mAh)", _f(PAPER["consumed_mAh"]), _f(w["consumed_mAh"])],
+        ["UAV energy recovered by charging (mAh)", _f(PAPER["recovered_mAh"]), _f(w["recovered_mAh"])],
+        ["Battery at the end, without charging (%)", _f(PAPER["battery_without_percent"], 2), _f(wo["battery_end_percent"], 2)],
+        ["Battery at the end, with charging (%)", _f(PAPER["battery_with_percent"], 2), _f(w["battery_end_percent"], 2)],
+        ["Saving (points of battery)", _f(PAPER["battery_with_percent"] - PAPER["battery_without_percent"], 2),
+         _f(w["battery_end_percent"] - wo["battery_end_percent"], 2)],
+    ]
+    enc = results["encounters"]
+    t = enc["encounter_to_lock_s"]
+    encounters = [
+        ["successes (locked and stored ≤ 60 s)", "2 of 2 (simulation)",
+         f"{enc['successes']}/{enc['trials']} (Wilson 95 %: {100 * enc['success_rate_ci95'][0]:.0f}–{100 * enc['success_rate_ci95'][1]:.0f} %)"],
+        ["unintended UAV–carrier contacts (trials)", "—", f"{enc['unintended_contacts']} ({enc['trials_with_contacts']})"],
+        ["encounter → lock, median / p95 / max (s)", "—", f"{_f(t['median'])} / {_f(t['p95'])} / {_f(t['max'])}"],
+    ]
+    c = results["planning_cycle"]
+    speed = [
+        ["planning cycle p50 / p95 (CPU ms, one core)", "f_B = 4 Hz (250 ms)", f"{c['p50_ms']:.1f} / {c['p95_ms']:.1f}"],
+        ["valid vertices per cycle (min / median)", "several hundred", f"{c['min_valid_vertices']} / {c['median_valid_vertices']:.0f}"],
+    ] + [
+        [f"IK engine {solver}, batch {size}: solves/s 1 / 2 workers", "M threads",
+         f"{r['1_worker']['solves_per_s']:,.0f} / {r['2_worker']['solves_per_s']:,.0f} ({r['scaling_2_vs_1']:.2f}×)"]
+        for solver, sizes in results["ik_engine"].items() for size, r in sizes.items()
+    ] + [
+        ["marsupial run usar_docking: sim / wall / RTF", "Gazebo, real time",
+         f"{results['rtf']['sim_time_s']:.0f} s / {results['rtf']['wall_time_s']:.0f} s / {results['rtf']['rtf']:.1f}×"],
+    ]
+    camera = [
+        [resolution, distance, f"{row['render_ms']:.0f}", f"{row['detect_ms']:.0f}", f"{row['found_percent']:.0f} %",
+         _f(row["error_mm"])]
+        for resolution, rows in results["camera"].items() for distance, row in rows.items()
+    ]
+    return [
+        ("Table II — times (s)", ["process", "paper (sim)", "ours"], table_ii),
+        ("Table III — distances, times, energy", ["", "paper (sim)", "ours"], table_iii),
+        ("Randomized docking encounters", ["", "paper", "ours"], encounters),
+        ("Speed", ["", "paper", "ours"], speed),
+        ("Eye-in-hand camera: render and bundle detection per frame (median)",
+         ["resolution", "distance (m)", "render ms", "detect ms", "found", "error (mm)"], camera),
+    ]
+
+
+def markdown_table(header: list[str], rows: list[list[str]]) -> str:
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    return "\n".join(lines + ["| " + " | ".join(r) + " |" for r in rows])
+
+
+def report(results: dict[str, Any], images: dict[str, str], path: Path) -> str:
+    """Write the Markdown report; returns its text."""
+    w = results["usar"]["with_charging"]
+    verdict = verdicts(results)
+    parts = [
+        "# VTOL-UAV docking on a mobile manipulator — Narváez et al. (2020), side by side",
+        "",
+        f"Generated by `python benchmarks/uav_docking.py{' --quick' if results['quick'] else ''} --workers "
+        f"{results['machine']['workers']}` on {results['machine']['date']} "
+        f"({results['machine']['cpus']} CPUs, Python {results['machine']['python']}); "
+        f"{results['benchmark_wall_time_s'] / 60:.0f} min in all. Every figure comes from the runs' MCAP logs.",
+        "",
+        "## Targets",
+        "",
+        markdown_table(["target", "measured", "met"], [[k, m, "yes" if ok else "**no**"] for k, (ok, m) in verdict.items()]),
+        "",
+        "## The mission (§V-A): `marsupial run usar_docking`",
+        "",
+        "The carrier follows the operator's guide path through `usar_building` in four legs (hall, corridor, lobby, "
+        "door frame into the target room) and waits for the UAV to be stored before the corridor and the door frame. "
+        "The operator deploys the UAV, requests a docking before the corridor, redeploys it in the lobby, requests "
+        "a docking before the door frame and deploys it in the target room, where it finds the target. The system's "
+        "own docking requests (battery < 20 %, area explored, difficult area within 0.5 m) are armed throughout; "
+        "in this run they did not fire. Operator script: "
+        + "; ".join(f"{t:.0f} s {c} ({why})" for t, c, why in w["operator"]) + ".",
+        "",
+        "Docking time: *request → lock* runs from the operator's request (the UAV flies to the meeting point over the "
+        "arm, the camera finds the bundle) to the lever lock; *encounter → lock* from the end of the initial "
+        "encounter (tracking + contact, the paper's docking process) to the lock.",
+        "",
+    ]
+    for title, header, rows in tables(results):
+        parts += [f"### {title}", "", markdown_table(header, rows), ""]
+    parts += [
+        "![paths](" + images["uav_docking_paths.png"] + ")",
+        "",
+        "![battery](" + images["uav_docking_battery.png"] + ")",
+        "",
+        "![tracking](" + images["uav_docking_tracking.png"] + ")",
+        "",
+        "## Energy model",
+        "",
+        "The Bebop 2 draws the electrical power of `world/energy.py`'s `RotorPowerModel` (momentum theory: induced "
+        "power of the thrust over the rotor disks / figure of merit 0.55, climb and drag power, / 0.60 motor + ESC "
+        "efficiency, + 6 W avionics; 85 W in hover, 21.9 min on the 2700 mAh 3S pack, the paper's '20 min') from a "
+        "LiPo model (voltage sags with the state of charge, I = P / V). Locked on Part A its motors are off and it "
+        "charges at the constant 3.5 A of the paper's 12.6 V / 3.5 A charger (CC phase) until full. Consumed and "
+        "recovered charge are summed from the 1 Hz state of charge: drops count as consumed, rises as recovered. "
+        "Without the charger (`--set team.carrier.options.docking.charger=false`) the stored UAV only stops "
+        "consuming.",
+        "",
+        "## How it runs, and what differs from the paper",
+        "",
+        "- Tracking (`track`): the eye-in-hand frames measure the bundle (solvePnP over every tag, eq. 1); the "
+        "measurement is fused with the two robots' odometry (a complementary filter that rejects outliers), which "
+        "carries the estimate through the last ~0.18 m of the contact phase, where the camera is too close to see "
+        "the tags. The UAV holds Part B at (0.20, 0, 0.80) m in M, facing the carrier's rear (so the camera, 4.5 cm "
+        "in front of Part A, sits under the tag plate during contact); the engine plans on the pose 0.15 s ahead "
+        "(its lag) with K_Lp = 0.005 (a held UAV needs little anticipation) and, during contact, a narrower vicinity "
+        "(K_a = 0.01, K_b = 0.02).",
+        "- Contact (`contact`): eq. (15) with k_c = 0.18 m (the paper prints no value: a 0.35 m gap closes in 6 s); "
+        "the sonar cone is a prohibited zone; the approach clock pauses while the last 3 cm would be closed on a "
+        "UAV more than 8 mm off Part A's axis; Part A stops 5 mm below Part B (inside D_c = 6 mm) and the magnet "
+        "makes the contact, then the levers lock (0.3 s).",
+        "- Camera and LiDAR: the eye-in-hand camera renders 320×240 instead of the PS Eye's 640×480 and the tree "
+        "ticks at 10 Hz (camera and LiDAR at 10 Hz, LiDAR at 1°): the table above shows the bundle is found in every "
+        "frame at 0.3–1.2 m at both resolutions, at a third of the rendering cost, which is what keeps the mission "
+        "above 3× real time.",
+        "- The paper's mission is longer (723 s, 572 s of flight); ours spends less time flying (the surveyed share "
+        "around the carrier saturates quickly indoors, and an `area explored` request would then take over from the "
+        "operator's), so less energy is consumed, while the storage through the corridor is long enough to recover "
+        "more than the paper's 185.6 mAh.",
+        "- Encounters use 2 m/s gusts in every trial (the top of the range) and carrier speeds drawn in "
+        "0.05–0.5 m/s; the contact monitor covers tracking and contact (installed by `track`), not the flight to "
+        "the meeting point.",
+        "",
+    ]
+    if results["encounters"]["failures"]:
+        parts += ["### Encounter failures", "", markdown_table(
+            ["seed", "UAV start / carrier speed", "outcome", "message"],
+            [[str(f["seed"]), f"{f['params'].get('team.uav.pose', '')} / {f['params'].get('carrier_speed', '')}",
+              f["outcome"], f["message"]] for f in results["encounters"]["failures"]]), ""]
+    text = "\n".join(parts)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+    return text
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    """Run everything, write the JSON and the report, print the tables; returns the results."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="20 encounters, quick speed figures")
+    parser.add_argument("--workers", type=int, default=2, help="parallel runs (default 2)")
+    parser.add_argument("--runs", type=Path, default=None, help="folder for the campaigns and their logs (default: temporary)")
+    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="JSON output")
+    parser.add_argument("--report", type=Path, default=DEFAULT_REPORT, help="Markdown report (PNGs go to its img/ folder)")
+    args = parser.parse_args(argv)
+    started = time.perf_counter()
+    with tempfile.TemporaryDirectory(prefix="uav_docking_runs_") as scratch:
+        runs = args.runs or Path(scratch)
+        runs.mkdir(parents=True, exist_ok=True)
+        results: dict[str, Any] = {
+            "quick": args.quick,
+            "machine": {"python": platform.python_version(), "platform": platform.platform(), "cpus": os.cpu_count(),
+                        "workers": args.workers, "date": time.strftime("%Y-%m-%d")},
+            "paper": PAPER,
+        }
+        results["planning_cycle"] = motion_engine.bench_cycles(quick=True)
+        results["ik_engine"] = motion_engine.bench_ik(quick=args.quick)
+        results["camera"] = camera_and_detection(frames=3 if args.quick else 10)
+        results["usar"], logs = run_usar(runs, args.workers)
+        results["encounters"] = run_encounters(runs, args.workers, args.quick)
+        results["rtf"] = real_time_factor()
+        images = plots(results["usar"], logs, args.report.parent / "img")
+        results["benchmark_wall_time_s"] = time.perf_counter() - started
+        text = report(results, images, args.report)
+        results["targets"] = {k: {"met": ok, "measured": m} for k, (ok, m) in verdicts(results).items()}
+        for label in results["usar"]:
+            results["usar"][label].pop("battery")  # in the plot; the JSON keeps the summaries
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(json.dumps(results, indent=2, default=float))
+    print_tables(tables(results) + [("Targets", ["target", "measured", "met"],
+                                     [[k, v["measured"], "yes" if v["met"] else "NO"] for k, v in results["targets"].items()])],
+                 {})
+    print(f"\nwrote {args.out} and {args.report}")
+    return results
+
+
+if __name__ == "__main__":
+    sys.exit(0 if all(t["met"] for t in main()["targets"].values()) else 1)
