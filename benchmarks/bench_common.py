@@ -6,6 +6,7 @@ next to them. Wall-clock timing lives here and in the scripts only, never in tes
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
 import os
@@ -30,6 +31,17 @@ def best_seconds(fn: Callable[[], Any], repeats: int) -> float:
         fn()
         best = min(best, time.perf_counter() - start)
     return best
+
+
+def campaign_arguments(description: str, quick_help: str, out: Path, report: Path) -> argparse.ArgumentParser:
+    """The options of a benchmark that runs missions through the campaign runner and writes a Markdown report."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--quick", action="store_true", help=quick_help)
+    parser.add_argument("--workers", type=int, default=2, help="parallel runs (default 2)")
+    parser.add_argument("--runs", type=Path, default=None, help="folder for the campaigns and their logs (default: a temporary one)")
+    parser.add_argument("--out", type=Path, default=out, help=f"JSON output (default {out.relative_to(out.parents[2])})")
+    parser.add_argument("--report", type=Path, default=report, help="Markdown report (PNGs go to its img/ folder)")
+    return parser
 
 
 def machine_info(**extra: Any) -> dict[str, Any]:
@@ -58,5 +70,5 @@ def print_tables(sections: Sequence[Section], machine: dict[str, Any]) -> None:
 def write_report(report: dict[str, Any], out: Path) -> None:
     """Write ``report`` as indented JSON to ``out`` (folders made as needed) and say where."""
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(report, indent=2))
+    out.write_text(json.dumps(report, indent=2, default=float))  # numpy scalars as numbers
     print(f"\nwrote {out}")

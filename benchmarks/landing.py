@@ -32,7 +32,6 @@ and prints the tables. The targets are checked and listed in the report.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import os
@@ -54,7 +53,7 @@ from marsupial.trees.campaign import run_campaign
 from marsupial.trees.replay import RunLog, read_log
 from marsupial.world import World
 
-from bench_common import best_seconds, machine_info, print_tables, write_report  # noqa: E402 (next to this script)
+from bench_common import campaign_arguments, best_seconds, machine_info, print_tables, write_report  # noqa: E402 (next to this script)
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_OUT = ROOT / "benchmarks" / "out" / "landing.json"
@@ -541,12 +540,7 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path, cycles: 
 
 # ------------------------------------------------------------------ main
 def main(argv: list[str] | None = None) -> dict[str, Any]:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--quick", action="store_true", help="1 run per §4.2.1 variant, 5 life-long cycles")
-    parser.add_argument("--workers", type=int, default=2, help="parallel runs (default 2)")
-    parser.add_argument("--runs", type=Path, default=None, help="folder for the campaigns and their logs (default: a temporary one)")
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="JSON output")
-    parser.add_argument("--report", type=Path, default=DEFAULT_REPORT, help="Markdown report (PNGs go to its img/ folder)")
+    parser = campaign_arguments(__doc__.split("\n\n")[0], "1 run per §4.2.1 variant, 5 life-long cycles", DEFAULT_OUT, DEFAULT_REPORT)
     args = parser.parse_args(argv)
     trials, cycles = (1, 5) if args.quick else (5, 50)
     with tempfile.TemporaryDirectory(prefix="landing_runs_") as scratch:

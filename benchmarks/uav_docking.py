@@ -35,11 +35,9 @@ figures. Writes the JSON, the Markdown report with PNG plots under
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import os
-import platform
 import statistics
 import sys
 import tempfile
@@ -58,7 +56,7 @@ from marsupial.world.robots.quadrotor import BEBOP2
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import motion_engine  # noqa: E402 (the planning-cycle and IK measurements, next to this script)
-from bench_common import print_tables  # noqa: E402
+from bench_common import campaign_arguments, machine_info, print_tables, write_report  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_OUT = ROOT / "benchmarks" / "out" / "uav_docking.json"
@@ -133,6 +131,8 @@ def mission_stats(log: RunLog) -> dict[str, Any]:
     t_u, xyz_u = log.poses("uav")
     operators = [(e["t"], e["command"], e.get("why", "")) for e in log.events_of("operator")]
     found = phase_events(log, "target_found")
+    requests = [{"t": e["t"], "by": e["by"], "why": e.get("why", "")}
+                for e in log.events_of("preemption") if e.get("by", "").endswith("docking")]
     return {
         "outcome": log.outcome,
         "mission_s": end,
@@ -148,6 +148,7 @@ def mission_stats(log: RunLog) -> dict[str, Any]:
         "uav_operation_s": end - sum(b - a for a, b in docked),
         "unintended_contacts": int(np.max(log.metric("unintended_contacts", robot="uav")[1], initial=0)),
         "operator": operators,
+        "docking_requests": requests,
         "target_found_s": found[0]["t"] if found else None,
     }
 
@@ -477,9 +478,10 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path) -> str:
         "door frame into the target room) and waits for the UAV to be stored before the corridor and the door frame. "
         "The operator deploys the UAV, requests a docking before the corridor, redeploys it in the lobby, requests "
         "a docking before the door frame and deploys it in the target room, where it finds the target. The system's "
-        "own docking requests (battery < 20 %, area explored, difficult area within 0.5 m) are armed throughout; "
-        "in this run they did not fire. Operator script: "
-        + "; ".join(f"{t:.0f} s {c} ({why})" for t, c, why in w["operator"]) + ".",
+        "own docking requests (battery < 20 %, area explored, difficult area within 0.5 m) are armed throughout. "
+        "Operator script: " + "; ".join(f"{t:.0f} s {c} ({why})" for t, c, why in w["operator"]) + ". "
+        "Docking requests that started a docking in this run: "
+        + "; ".join(f"{r['t']:.0f} s {r['by']} ({r['why']})" for r in w["docking_requests"]) + ".",
         "",
         "Docking time: *request → lock* runs from the operator's request (the UAV flies to the meeting point over the "
         "arm, the camera finds the bundle) to the lever lock; *encounter → lock* from the end of the initial "
@@ -545,12 +547,7 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path) -> str:
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Run everything, write the JSON and the report, print the tables; returns the results."""
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--quick", action="store_true", help="20 encounters, quick speed figures")
-    parser.add_argument("--workers", type=int, default=2, help="parallel runs (default 2)")
-    parser.add_argument("--runs", type=Path, default=None, help="folder for the campaigns and their logs (default: temporary)")
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="JSON output")
-    parser.add_argument("--report", type=Path, default=DEFAULT_REPORT, help="Markdown report (PNGs go to its img/ folder)")
+    parser = campaign_arguments(__doc__.split("\n\n")[0], "20 encounters, quick speed figures", DEFAULT_OUT, DEFAULT_REPORT)
     args = parser.parse_args(argv)
     started = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="uav_docking_runs_") as scratch:
@@ -558,8 +555,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         runs.mkdir(parents=True, exist_ok=True)
         results: dict[str, Any] = {
             "quick": args.quick,
-            "machine": {"python": platform.python_version(), "platform": platform.platform(), "cpus": os.cpu_count(),
-                        "workers": args.workers, "date": time.strftime("%Y-%m-%d")},
+            "machine": machine_info(workers=args.workers, date=time.strftime("%Y-%m-%d")),
             "paper": PAPER,
         }
         results["planning_cycle"] = motion_engine.bench_cycles(quick=True)
@@ -570,16 +566,15 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         results["rtf"] = real_time_factor()
         images = plots(results["usar"], logs, args.report.parent / "img")
         results["benchmark_wall_time_s"] = time.perf_counter() - started
-        text = report(results, images, args.report)
+        report(results, images, args.report)
         results["targets"] = {k: {"met": ok, "measured": m} for k, (ok, m) in verdicts(results).items()}
         for label in results["usar"]:
             results["usar"][label].pop("battery")  # in the plot; the JSON keeps the summaries
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text(json.dumps(results, indent=2, default=float))
     print_tables(tables(results) + [("Targets", ["target", "measured", "met"],
                                      [[k, v["measured"], "yes" if v["met"] else "NO"] for k, v in results["targets"].items()])],
-                 {})
-    print(f"\nwrote {args.out} and {args.report}")
+                 results["machine"])
+    print(f"report: {args.report}")
+    write_report(results, args.out)
     return results
 
 

@@ -112,6 +112,21 @@ def test_magnet_pulls_part_b_within_the_capture_distance_into_contact(scene):
     assert dock.aligned(uav)
 
 
+def test_contact_is_the_gap_between_the_faces_within_the_cone_s_tolerances(scene):
+    world, mm, uav = scene
+    dock = mm.docking
+    _place(mm, uav, 0.002, lateral=0.008)  # faces touching, 8 mm off the axis: the cone centres it
+    assert dock.distance_to(uav) > CONTACT_DISTANCE and dock.in_contact(uav)
+    _place(mm, uav, 0.002, lateral=dock.lateral_tolerance + 0.005)  # beside the cone
+    assert not dock.in_contact(uav)
+    _place(mm, uav, -0.5)  # on the axis, half a metre below Part A
+    assert not dock.in_contact(uav)
+    _place(mm, uav, 0.002, lateral=0.008)
+    assert dock.lock() is True
+    world.step(LOCK_TIME + 0.05)
+    assert dock.state == "locked" and dock.docked is uav
+
+
 def test_lock_refuses_without_contact(scene):
     world, mm, uav = scene
     dock = mm.docking

@@ -86,7 +86,7 @@ def cli() -> None:
 @click.option("--quiet", "-q", is_flag=True, help="No progress line and no summary table.")
 def run(mission: str, seed: int | None, log_path: str | None, until: float | None, gui: bool,
         sets: tuple[str, ...], operator: bool, record_images: bool, quiet: bool) -> None:
-    """Run MISSION (a name or a .yaml path; default: the demo mission)."""
+    """Run MISSION (a name or a .yaml path; default: usar_docking, the USAR docking mission)."""
     from .runner import run_mission
 
     try:

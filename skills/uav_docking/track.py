@@ -225,7 +225,7 @@ class Track(Skill):
         max_age: float = Field(0.2, gt=0.0)
         """Oldest measurement (s) the UAV's hold and the engine use; older: the marker counts as unseen."""
         lost_timeout: float | None = Field(10.0, gt=0.0)
-        """Fail when the marker has not been seen for this long (s); none: never."""
+        """Fail when the marker has not been seen for this long (s), counted from the end of a contact phase; none: never."""
         contact: bool = True
         """Read the contact phase's target (``<carrier>/contact_target``, written by ``contact``)."""
         K_Lp: float = Field(0.005, ge=0.0)
@@ -280,6 +280,7 @@ class Track(Skill):
         self.seen_at = self.measured_at = -math.inf
         self.started = self.world.now
         self.contact: ContactTarget | None = None
+        self.contact_until = -math.inf  # last tick of a contact phase (the marker may be too close to see)
         self.sonar_T_Q = self._sonar_in_uav()
         self.write(f"{p.carrier}/{DOCKING_FLAG}", True)
         self.touches = 0
@@ -302,11 +303,13 @@ class Track(Skill):
                 self.seen_at = self.measured_at
         self.T_M_Q = self.fusion.estimate(T_M_Q_odometry)
         seen = now - self.seen_at <= p.max_age + 1e-9
-        lost_for = now - max(self.seen_at, self.started)
+        lost_for = now - max(self.seen_at, self.started, self.contact_until)  # blind in contact: counts after it
         if p.lost_timeout is not None and self.contact is None and lost_for > p.lost_timeout:
             self.feedback_message = f"marker unseen for {p.lost_timeout:.0f} s: tracking lost"
             return Status.FAILURE
         self._apply_contact(self.read(f"{p.carrier}/{CONTACT_TARGET}") if p.contact else None)
+        if self.contact is not None:
+            self.contact_until = now
         state = TrackingState(now, self.started, seen, self.seen_at)
         if self.T_M_Q is None:
             self.carrier.hold_arm()

@@ -70,7 +70,7 @@ class DockingDevice:
         capture_distance: ``D_c`` (m), §IV-C.
         holding_force: magnet pull at contact (N), §V-B.
         force_length: ``d_0`` (m) of the pull's fall-off with the gap.
-        contact_distance: gap (m) up to which the parts count as in contact.
+        contact_distance: gap (m) between the faces, along Part A's axis, up to which the parts count as in contact.
         lock_time: lever actuation time (s, simulated).
         lateral_tolerance: largest offset (m) of Part B from Part A's axis for :meth:`aligned`.
         tilt_tolerance: largest angle (rad) between the parts' axes for :meth:`aligned`.
@@ -161,8 +161,9 @@ class DockingDevice:
         return lateral <= self.lateral_tolerance and tilt <= self.tilt_tolerance
 
     def in_contact(self, uav: Robot) -> bool:
-        """True when ``uav``'s Part B touches Part A (gap ≤ ``contact_distance``)."""
-        return self.distance_to(uav) <= self.contact_distance
+        """True when ``uav``'s Part B rests on Part A: the faces within ``contact_distance`` along Part A's axis,
+        Part B's centre and axis within the lateral and tilt tolerances the conical structure centres (§IV-C)."""
+        return abs(self.offset_to(uav)[0]) <= self.contact_distance and self.aligned(uav)
 
     def status(self) -> dict[str, Any]:
         """JSON-ready summary: state, docked UAV name (or ``None``), levers moving."""
@@ -228,8 +229,7 @@ class DockingDevice:
         return [r for r in self.world.robots.values() if r is not self.carrier and "part_b" in r.links]
 
     def _uav_in_contact(self) -> Robot | None:
-        touching = [(self.distance_to(r), r.name, r) for r in self._candidates()]
-        touching = [t for t in touching if t[0] <= self.contact_distance]
+        touching = [(self.distance_to(r), r.name, r) for r in self._candidates() if self.in_contact(r)]
         return min(touching)[2] if touching else None
 
     def _pull(self) -> None:
