@@ -4,7 +4,7 @@ Two complementary parts. *Part A*, on the carrier's end effector, holds a
 12 V–250 N electromagnet and a set of levers that a micro servo closes
 through gears; *Part B* is a light adapter with a metal disc under the UAV.
 The sequence (Fig. 12): Part A approaches Part B until they are closer
-than ``D_c``; the electromagnet pulls them into an initial contact; the
+than ``D_c`` (the ``contact`` skill's parameter, 6 mm); the electromagnet pulls them into an initial contact; the
 servo then closes the levers around Part B's ring, which fixes the UAV to
 the arm (here: a rigid pybullet constraint). Releasing opens the levers and
 switches the magnet off.
@@ -17,15 +17,16 @@ is level). Docked, the two origins coincide and the z axes are parallel.
 
 Magnet force. A holding magnet's pull falls off steeply with the air gap
 ``d``; we use ``F(d) = F_hold / (1 + d / d_0)²`` with ``F_hold = 250 N``
-(§V-B) and ``d_0 = 2 mm``, applied only within the capture distance
-``D_c``. At ``D_c = 10 mm`` it still pulls 6.9 N, more than the 4.9 N
-weight of the 0.5 kg Bebop 2, so a hovering UAV is drawn into contact.
+(§V-B) and ``d_0 = 2 mm``, applied only within the magnet's reach
+(``capture_distance``). At its 10 mm it still pulls 6.9 N, more than the
+4.9 N weight of the 0.5 kg Bebop 2, so a hovering UAV is drawn into contact.
 
-Capture distance. §IV-C: "When Part B is aligned at a distance less than
+Reach and D_c. §IV-C: "When Part B is aligned at a distance less than
 D_c with the Part A, the electromagnet is activated to force an initial
 contact"; the figure printed with it in the available text ("0 mm") is the
-gap the magnet closes, not a capture range, so ``D_c`` is taken as the
-range of such a magnet on a light adapter disc: 10 mm.
+gap the magnet closes, not where it is switched on. The reach is taken as
+the range of such a magnet on a light adapter disc, 10 mm, and ``D_c``
+(where the skill switches it on) must lie within it.
 
 Robots that want to know implement ``on_docked(charger: bool)`` (called
 when the levers lock; ``charger`` says whether the carrier charges the UAV,
@@ -46,7 +47,7 @@ from .base import rotation_matrix
 if TYPE_CHECKING:
     from .base import Robot
 
-CAPTURE_DISTANCE = 0.010  # D_c (m), §IV-C: range within which the magnet draws Part B into contact
+CAPTURE_DISTANCE = 0.010  # m, the magnet's reach: range within which it draws Part B into contact (D_c ≤ it, §IV-C)
 HOLDING_FORCE = 250.0  # N, the 12 V–250 N electromagnet of Part A, §V-B
 FORCE_LENGTH = 0.002  # m, d_0 of the pull F(d) = F_hold / (1 + d / d_0)²
 CONTACT_DISTANCE = 0.004  # m: gap counted as contact (touching faces rest ≈2 mm apart in pybullet)
@@ -67,7 +68,7 @@ class DockingDevice:
     Args:
         carrier: robot carrying Part A.
         link: name of Part A's link.
-        capture_distance: ``D_c`` (m), §IV-C.
+        capture_distance: the magnet's reach (m); the skill's ``D_c`` (§IV-C) lies within it.
         holding_force: magnet pull at contact (N), §V-B.
         force_length: ``d_0`` (m) of the pull's fall-off with the gap.
         contact_distance: gap (m) between the faces, along Part A's axis, up to which the parts count as in contact.
@@ -175,7 +176,7 @@ class DockingDevice:
 
     # ------------------------------------------------------------- commands
     def magnet_on(self) -> None:
-        """Energise the electromagnet: Part B closer than ``D_c`` is pulled onto Part A."""
+        """Energise the electromagnet: Part B within its reach (``capture_distance``) is pulled onto Part A."""
         self.magnet = True
 
     def magnet_off(self) -> None:
