@@ -46,9 +46,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
 
 from marsupial.skills.uav_docking.pose import UavPoseMeasurement
 from marsupial.trees.campaign import run_campaign
+from marsupial.trees.mission import find_mission
 from marsupial.trees.replay import RunLog, read_log
 from marsupial.trees.runner import run_mission
 from marsupial.world import World
@@ -154,9 +156,10 @@ def mission_stats(log: RunLog) -> dict[str, Any]:
 
 
 def run_usar(runs: Path, workers: int) -> tuple[dict[str, Any], dict[str, RunLog]]:
-    """The mission with and without charging, in parallel (one campaign, two combinations)."""
+    """The mission with and without charging, in parallel (one campaign, two combinations), at its own seed."""
     out = runs / "usar"
-    run_campaign(MISSION, 1, out, vary={"team.carrier.options.docking.charger": ["true", "false"]},
+    seed = yaml.safe_load(find_mission(MISSION).read_text())["world"]["seed"]  # as `marsupial run` runs it
+    run_campaign(MISSION, 1, out, base_seed=seed, vary={"team.carrier.options.docking.charger": ["true", "false"]},
                  workers=workers, keep_logs="all")
     records = json.loads((out / "trials.json").read_text())
     logs, stats = {}, {}
@@ -165,6 +168,7 @@ def run_usar(runs: Path, workers: int) -> tuple[dict[str, Any], dict[str, RunLog
         logs[label] = read_log(record["log"])
         stats[label] = mission_stats(logs[label])
         stats[label]["wall_time_s"] = record["wall_time"]
+        stats[label]["seed"] = record["seed"]
     return stats, logs
 
 
@@ -474,7 +478,7 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path) -> str:
         "",
         "## The mission (§V-A): `marsupial run usar_docking`",
         "",
-        "The carrier follows the operator's guide path through `usar_building` in four legs (hall, corridor, lobby, "
+        f"Run at the mission's own seed ({w['seed']}), as `marsupial run` runs it, with and without charging. The carrier follows the operator's guide path through `usar_building` in four legs (hall, corridor, lobby, "
         "door frame into the target room) and waits for the UAV to be stored before the corridor and the door frame. "
         "The operator deploys the UAV, requests a docking before the corridor, redeploys it in the lobby, requests "
         "a docking before the door frame and deploys it in the target room, where it finds the target. The system's "
