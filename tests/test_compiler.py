@@ -206,6 +206,9 @@ def test_unknown_condition_is_reported_with_the_closest_name(tmp_path):
 def test_robot_kind_and_robot_presence_are_checked(tmp_path):
     err = compile_error(tmp_path, "skill: drive_to\nrobot: uav\nparams: {target: [1, 1]}")
     assert "cannot run on 'uav' (a bebop2)" in str(err) and err.line == 6
+    err = compile_error(tmp_path, "until: {skill: wait}\ncondition: {battery_below: 0.2, robot: ugv}", team=UGV_TEAM)
+    assert str(err).endswith("condition 'battery_below' cannot run on 'ugv' (a summit_xl); "
+                             "expected a robot whose kind or class is Quadrotor")  # no battery: at compile time
     err = compile_error(tmp_path, "skill: wait\nrobot: uav")
     assert "takes no robot" in str(err)
     two = "team:\n  a: {robot: bebop2}\n  b: {robot: tello}\n"

@@ -107,7 +107,7 @@ def test_unknown_robot_and_carrier_suggest_team_members():
 def test_unknown_reference_suggests_a_parameter():
     error = error_of("mission: m\nparams: {height: 2}\ntree:\n  skill: goto\n  params: {z: '${heigth}'}\n")
     assert str(error) == ("bad.yaml:5:12: tree.params.z: unknown parameter reference '${heigth}'; "
-                          "expected a parameter (one of height); did you mean 'height'?")
+                          "expected a parameter (height); did you mean 'height'?")
 
 
 def test_bad_plugin_reference():

@@ -147,7 +147,7 @@ def test_missions_are_found_by_package_name_or_path(tmp_path, monkeypatch):
     with pytest.raises(MissionError) as caught:
         load_mission("patroll")
     assert "unknown mission 'patroll'" in str(caught.value)
-    assert "a mission name (one of patrol)" in str(caught.value) and "did you mean 'patrol'?" in str(caught.value)
+    assert "a mission name (patrol)" in str(caught.value) and "did you mean 'patrol'?" in str(caught.value)
 
 
 def test_json_schema_describes_missions_and_accepts_a_valid_one():

@@ -30,12 +30,10 @@ class BatteryBelow(Condition):
         """State of charge (fraction 0..1) below which the condition holds."""
 
     primary: ClassVar[str] = "threshold"
+    robot_kinds: ClassVar[tuple[str, ...]] = ("Quadrotor",)  # the robots with a battery model (world/energy.py)
 
     def check(self) -> bool:
-        battery = getattr(self.robot.robot, "battery", None)
-        if battery is None:
-            raise RuntimeError(f"{self.name}: robot '{self.robot_name}' has no battery")
-        return battery.soc < self.params.threshold
+        return self.robot.robot.battery.soc < self.params.threshold
 
 
 class OperatorSaid(Condition):
