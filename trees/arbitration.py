@@ -9,10 +9,10 @@ safe-stop asked for in tick *k* is dropped when another node already
 commanded that robot in tick *k* (that node has taken the robot over and is
 responsible for it).
 
-Skills never hold the bare robot: they get a :class:`CommandPort` whose
-reads (pose, state, battery, sensors …) pass through unchanged and whose
-command methods (:data:`COMMAND_METHODS`, or a robot class's own
-``commands`` attribute) go through the arbiter.
+Skills never hold a robot's body: they get a :class:`CommandPort` over its
+onboard interface (:mod:`marsupial.world.onboard`), whose reads (estimate,
+sensors, device states) pass through unchanged and whose command methods
+(the interface's ``commands``) go through the arbiter.
 """
 
 from __future__ import annotations
@@ -21,22 +21,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from marsupial.world.robots.base import Robot
-
-#: robot methods that move the robot (every robot kind of the world uses these names);
-#: a robot class may declare its own set as a ``commands`` class attribute.
-COMMAND_METHODS = frozenset(
-    {
-        "command_velocity",  # quadrotors: (vx, vy, vz, yaw_rate, frame)
-        "hover",
-        "set_motors",
-        "drive",  # ground robots: (v, omega)
-        "stop",
-        "set_joint_targets",  # manipulators
-        "hold_arm",
-        "safe_stop",
-    }
-)
+    from marsupial.world.onboard import Onboard as Robot
 
 
 @dataclass(frozen=True)
@@ -50,8 +35,8 @@ class Stamp:
 
 
 def commands_of(robot: Robot) -> frozenset[str]:
-    """Names of the command methods of ``robot`` (its ``commands`` attribute or :data:`COMMAND_METHODS`)."""
-    return frozenset(getattr(robot, "commands", COMMAND_METHODS))
+    """Names of the command methods of an onboard interface (its ``commands`` attribute)."""
+    return frozenset(robot.commands)
 
 
 class Arbiter:

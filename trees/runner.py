@@ -291,7 +291,7 @@ def run_mission(
     context = RunContext(operator=channel)
     tree = compile_mission(mission, context)  # bad input fails here, before world and log exist
     world = build_world(mission, seed, gui)
-    context.world = world
+    context.attach(world)
     if operator_stdin:
         channel.read_from(sys.stdin)
 

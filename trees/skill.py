@@ -27,7 +27,7 @@ implements :meth:`Condition.check` and never returns RUNNING.
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import InitVar, dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import py_trees
@@ -37,7 +37,10 @@ from pydantic import BaseModel, ConfigDict
 from .arbitration import Arbiter, CommandPort, Stamp
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from marsupial.world import World
+    from marsupial.world.team_link import LinkPort
 
     from .operator import OperatorChannel
 
@@ -53,24 +56,76 @@ class NodeParams(BaseModel):
 
 @dataclass
 class RunContext:
-    """What the nodes of one run share: the world, the arbiter, the operator channel, the recorder.
+    """What the nodes of one run share: sim time, the team's onboard interfaces, the arbiter, operator, recorder.
 
+    The world itself stays behind this object (the sensing boundary, see
+    :mod:`marsupial.world.onboard`): nodes get the simulated time
+    (:attr:`now`), seeded random streams (:meth:`rng`), each team member's
+    onboard interface (:meth:`onboard`) and the team link (:meth:`link`).
     ``world`` is ``None`` when a tree is compiled only to be drawn or
     exported. Events and metrics go to the recorder (if any) stamped with
-    the world's simulated time; the last value of every metric is kept in
+    the simulated time; the last value of every metric is kept in
     :attr:`metrics` for the run's result.
     """
 
-    world: World | None = None
+    world: InitVar[World | None] = None
     arbiter: Arbiter = field(default_factory=Arbiter)
     operator: OperatorChannel | None = None
     recorder: Any = None
     metrics: dict[str, float] = field(default_factory=dict)
 
+    def __post_init__(self, world: World | None) -> None:
+        self.__world = world
+
+    def attach(self, world: World) -> None:
+        """Run the nodes compiled with this context in ``world`` (the runner calls it once the world is built)."""
+        self.__world = world
+
+    @property
+    def running(self) -> bool:
+        """True when the context has a world to run in (False for trees compiled only to draw or export)."""
+        return self.__world is not None
+
+    def _require_world(self, what: str) -> World:
+        if self.__world is None:
+            raise RuntimeError(f"{what}: the tree was compiled without a world and cannot run")
+        return self.__world
+
     @property
     def now(self) -> float:
-        """Simulated time (s) of the world (0 without a world)."""
-        return self.world.now if self.world is not None else 0.0
+        """Simulated time (s) of the run (0 without a world)."""
+        return self.__world.now if self.__world is not None else 0.0
+
+    @property
+    def tick_period(self) -> float:
+        """Physics step (s): the finest time step of the run."""
+        return self._require_world("tick_period").clock.dt
+
+    def rng(self, key: str) -> np.random.Generator:
+        """A seeded random stream for ``key`` (derived from the run's seed; e.g. a planner's samples)."""
+        return self._require_world(f"rng({key!r})").rng_for(f"node/{key}")
+
+    def team(self) -> tuple[str, ...]:
+        """Names of the team members."""
+        return tuple(self.__world.robots) if self.__world is not None else ()
+
+    def kind_of(self, name: str) -> str:
+        """Kind of team member ``name`` (``"bebop2"``, …)."""
+        return self._require_world(f"robot '{name}'").robot(name).kind
+
+    def onboard(self, name: str) -> Any:
+        """The onboard interface of team member ``name`` (:mod:`marsupial.world.onboard`); the error lists the team."""
+        from marsupial.world.onboard import onboard_of
+
+        return onboard_of(self._require_world(f"robot '{name}'").robot(name))
+
+    def link(self, name: str) -> LinkPort:
+        """The team link as team member ``name`` uses it (send as it, read the others' telemetry)."""
+        from marsupial.world.team_link import LinkPort
+
+        world = self._require_world(f"team link of '{name}'")
+        world.robot(name)  # a clear error for an unknown member
+        return LinkPort(world.team_link, name)
 
     def event(self, kind: str, **fields: Any) -> None:
         """Record an event of ``kind`` (``preemption``, ``operator``, …) at the current sim time."""
@@ -165,20 +220,29 @@ class MissionNode(py_trees.behaviour.Behaviour):
 
     # -------------------------------------------------------------- access
     @property
-    def world(self) -> World:
-        """The run's :class:`~marsupial.world.World`."""
-        if self.context.world is None:
-            raise RuntimeError(f"node '{self.name}' was compiled without a world and cannot run")
-        return self.context.world
+    def now(self) -> float:
+        """Simulated time (s) of the run."""
+        return self.context.now
 
     @property
     def robot(self) -> CommandPort:
-        """The team robot this node acts on, seen through the arbiter (reads pass through)."""
+        """The onboard interface of the robot this node acts on, through the arbiter (reads pass through)."""
         if self._port is None:
             if self.robot_name is None:
                 raise RuntimeError(f"node '{self.name}' has no robot")
-            self._port = CommandPort(self.world.robot(self.robot_name), self.context.arbiter, self.id, self.name)
+            self._port = self.member(self.robot_name)
         return self._port
+
+    def member(self, name: str) -> CommandPort:
+        """Team member ``name``'s onboard interface as this node commands it (stamped by the run's arbiter)."""
+        return CommandPort(self.context.onboard(name), self.context.arbiter, self.id, self.name)
+
+    @property
+    def link(self) -> LinkPort:
+        """The team link as this node's robot uses it (telemetry of the others: ``link.latest(name)``)."""
+        if self.robot_name is None:
+            raise RuntimeError(f"node '{self.name}' has no robot and no team link")
+        return self.context.link(self.robot_name)
 
     def read(self, key: str, default: Any = None) -> Any:
         """Blackboard value of a declared read key, ``default`` while nothing wrote it."""

@@ -12,6 +12,7 @@ as pybullet returns them.
 
 from __future__ import annotations
 
+import math
 import zlib
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -23,6 +24,7 @@ from pybullet_utils.bullet_client import BulletClient
 
 from .errors import UnknownNameError
 from .quiet import quiet_fd
+from .team_link import TeamLink, TeamLinkConfig
 
 if TYPE_CHECKING:
     from .robots.base import Robot
@@ -90,6 +92,9 @@ class World:
         seed: seed of every random draw in the run (noise, gusts, drops).
         gui: open the pybullet GUI instead of the headless DIRECT client.
         physics_hz: fixed physics rate in Hz (240 unless a test needs otherwise).
+        noise_scale: multiplies every sensing noise, bias, drift, latency and loss figure
+            (``world.sensing.noise_scale`` of a mission; 0: perfect sensing, for debugging only).
+        team_link: latency, loss and telemetry rate of the team's radio (:mod:`.team_link`).
     """
 
     def __init__(
@@ -98,6 +103,8 @@ class World:
         seed: int = 0,
         gui: bool = False,
         physics_hz: int = PHYSICS_HZ,
+        noise_scale: float = 1.0,
+        team_link: TeamLinkConfig | None = None,
     ):
         self.seed = int(seed)
         self.clock = SimClock(physics_hz=physics_hz)
@@ -110,6 +117,12 @@ class World:
         self._actors: list[Actor] = []
         self._step_hooks: list[Callable[[float], None]] = []
         self._closed = False
+        if not (noise_scale >= 0.0 and math.isfinite(noise_scale)):
+            raise ValueError(f"noise_scale must be a finite number >= 0, got {noise_scale}")
+        #: multiplies every sensor noise, bias, drift, latency and loss figure (0: perfect sensing, for debugging)
+        self.noise_scale = float(noise_scale)
+        self.team_link = TeamLink(self, (team_link or TeamLinkConfig()).scaled(self.noise_scale))
+        self._actors.append(self.team_link)
 
         b = self.bullet
         b.resetSimulation()

@@ -15,7 +15,11 @@ import numpy as np
 import pybullet
 
 from ..assets import asset_path
+from marsupial.geometry import yaw_of  # noqa: F401  (re-exported for the robot modules)
+
 from ..errors import UnknownNameError
+from ..estimation.base import Estimator, ProvisionalPassthrough
+from ..onboard import Onboard, base_frame_offset
 
 if TYPE_CHECKING:
     from ..sensors.base import Sensor
@@ -45,12 +49,6 @@ def rotation_matrix(quaternion: Sequence[float]) -> np.ndarray:
     return np.array(pybullet.getMatrixFromQuaternion(quaternion)).reshape(3, 3)
 
 
-def yaw_of(quaternion: Sequence[float]) -> float:
-    """Heading (rad) about world z of an ``[x, y, z, w]`` quaternion."""
-    x, y, z, w = quaternion
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-
-
 class Robot:
     """Base of every robot: owns one pybullet body (or more) and its sensors.
 
@@ -62,6 +60,8 @@ class Robot:
 
     #: registry name of the kind, e.g. ``"bebop2"``
     kind: str = ""
+    #: the class of its onboard interface (what skills get, :mod:`marsupial.world.onboard`)
+    onboard_class: type[Onboard] = Onboard
 
     def __init__(self, world: World, name: str):
         self.world = world
@@ -70,6 +70,8 @@ class Robot:
         self.body_id: int = -1
         self.links: dict[str, int] = {}
         self.sensors: dict[str, Sensor] = {}
+        self._link_offsets: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        self.estimator: Estimator = ProvisionalPassthrough(self)
 
     # ------------------------------------------------------------ building
     def load_urdf(
@@ -94,6 +96,8 @@ class Robot:
         for j in range(pybullet.getNumJoints(body, physicsClientId=self.cid)):
             info = pybullet.getJointInfo(body, j, physicsClientId=self.cid)
             self.links[info[12].decode()] = j
+        p_base, q_base = self.pose()
+        self._link_offsets = {name: base_frame_offset(p_base, q_base, *self.link_pose(index)) for name, index in self.links.items()}
         return body
 
     def add_sensor(self, sensor: Sensor) -> Sensor:
@@ -128,6 +132,14 @@ class Robot:
             self.body_id, index, computeForwardKinematics=True, physicsClientId=self.cid
         )
         return np.array(state[4]), np.array(state[5])
+
+    def link_offset(self, link: str) -> tuple[np.ndarray, np.ndarray]:
+        """Position (m) and rotation of ``link`` in the base frame as the URDF places it (the model, not a measurement)."""
+        try:
+            p, R = self._link_offsets[link]
+        except KeyError:
+            raise UnknownNameError(f"link of {self.kind}", link, self.links) from None
+        return p.copy(), R.copy()
 
     def mounted_frame(
         self, link: str | int, offset: np.ndarray, R_link_frame: np.ndarray

@@ -166,6 +166,10 @@ class DockingDevice:
         Part B's centre and axis within the lateral and tilt tolerances the conical structure centres (§IV-C)."""
         return abs(self.offset_to(uav)[0]) <= self.contact_distance and self.aligned(uav)
 
+    def contact_switch(self) -> bool:
+        """The limit switch under Part A's face: closed while some UAV's Part B rests seated on it (device state)."""
+        return self._uav_in_contact() is not None
+
     def status(self) -> dict[str, Any]:
         """JSON-ready summary: state, docked UAV name (or ``None``), levers moving."""
         return {

@@ -37,6 +37,7 @@ import pybullet
 
 from ..errors import UnknownNameError
 from ..kinematics import ArmKinematics
+from ..onboard import CarrierOnboard
 from ..sensors.base import SensorConfig
 from ..sensors.camera import Camera, Intrinsics
 from ..sensors.lidar import Lidar, LidarSpec
@@ -161,6 +162,7 @@ class MobileManipulator(WheeledRobot):
     """
 
     kind = "mobile_manipulator"
+    onboard_class = CarrierOnboard
     urdf = "mobile_manipulator.urdf"
     default_limits = MOBILE_MANIPULATOR_LIMITS
     payload_kg = PAYLOAD_KG
@@ -258,6 +260,10 @@ class MobileManipulator(WheeledRobot):
 
     def joint_positions(self) -> np.ndarray:
         """Arm joint angles now (rad)."""
+        return self.arm.positions()
+
+    def arm_encoders(self) -> np.ndarray:
+        """Arm joint angles as the joint encoders read them (rad). PROVISIONAL: exact until the encoder model lands."""
         return self.arm.positions()
 
     def joint_velocities(self) -> np.ndarray:

@@ -69,6 +69,7 @@ from ..sensors.camera import OPTICAL_DOWN, OPTICAL_FORWARD, Camera, Intrinsics
 from ..sensors.imu import Imu
 from ..sensors.sonar import Sonar
 from ..world import GRAVITY
+from ..onboard import QuadrotorOnboard
 from .base import Robot, pose_from_list, rotation_matrix
 
 if TYPE_CHECKING:
@@ -289,6 +290,7 @@ class Quadrotor(Robot):
     """
 
     spec: QuadrotorSpec
+    onboard_class = QuadrotorOnboard
 
     def __init__(
         self,

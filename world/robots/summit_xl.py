@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet
 
+from ..onboard import PlatformOnboard
 from .diff_drive import DiffDriveLimits
 from .wheeled import WheeledRobot
 
@@ -65,6 +66,7 @@ class SummitXL(WheeledRobot):
     """
 
     kind = "summit_xl"
+    onboard_class = PlatformOnboard
     urdf = "summit_xl.urdf"
     default_limits = SUMMIT_XL_LIMITS
 

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet
 
+from ..onboard import WheeledOnboard
 from .base import Robot, pose_from_list, yaw_of
 from .diff_drive import DiffDrive, DiffDriveLimits
 
@@ -51,6 +52,7 @@ class WheeledRobot(Robot):
             (e.g. ``{"noise_std": 0.0}``).
     """
 
+    onboard_class = WheeledOnboard
     #: file under ``world/assets/`` with a ``base_footprint`` link
     urdf: str = ""
     #: drive limits of the kind (subclasses set the paper's values)
@@ -95,6 +97,10 @@ class WheeledRobot(Robot):
         v, _ = self.velocity()
         yaw = yaw_of(self.pose()[1])
         return float(v[0] * math.cos(yaw) + v[1] * math.sin(yaw))
+
+    def wheel_speed(self) -> float:
+        """Forward speed (m/s) as the wheel encoders measure it. PROVISIONAL: exact until the odometry model lands."""
+        return self.speed()
 
     def footprint_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """World pose of ``base_footprint`` (the base projected on the ground)."""

@@ -1,0 +1,384 @@
+"""Onboard interfaces: what a robot's own computer has, and all that a skill may use of a robot.
+
+The sensing boundary (``docs/world.md``, "Sensing boundary"): a robot is a
+body (its true pose, velocity and contacts, used only by the world, the
+sensors, the recorder and scoring) plus an onboard interface, built here:
+
+- sensor readings (:class:`SensorPort`: camera images without their true
+  pose, depth, LiDAR scans, sonar, IMU, barometer, battery monitor);
+- the robot's state estimate (:class:`~marsupial.world.estimation.StateEstimate`);
+- the states its devices report (motor arming, docking switches, magnet,
+  lift encoder) and its joint and wheel encoders;
+- its command inputs (the names in :attr:`Onboard.commands`);
+- its static model: mount extrinsics, URDF link offsets, arm kinematics,
+  limits — what its designers wrote down, not what the world measures.
+
+An interface keeps its robot in a private slot and offers no attribute that
+leads to the world, pybullet or a truth accessor; a test runs every shipped
+mission with truth calls from skill code trapped
+(``tests/test_sensing_boundary.py``). Frames and units as in
+:mod:`marsupial.world.estimation.base`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+
+from marsupial.geometry import quaternion_from_matrix, rotation_matrix
+
+from .estimation.base import StateEstimate
+from .sensors.base import Reading
+
+if TYPE_CHECKING:
+    from .robots.base import Robot
+    from .sensors.base import Sensor
+
+
+@dataclass(frozen=True)
+class CameraImage:
+    """A camera frame as the robot receives it: pixels and intrinsics, no pose.
+
+    Attributes:
+        rgb: ``(h, w, 3)`` uint8.
+        depth: ``(h, w)`` float32 metres along the optical axis (RGB-D cameras; rendered depth with the
+            sensor's noise), ``None`` for a camera that measures no depth.
+        K: 3×3 intrinsics (pixels).
+    """
+
+    rgb: np.ndarray
+    depth: np.ndarray | None
+    K: np.ndarray
+
+
+#: static facts of a sensor that a skill may read (its datasheet and mount), by attribute name
+SENSOR_FACTS = frozenset(
+    {
+        "K", "intrinsics", "offset", "R_link_optical", "half_angle", "min_range", "max_range", "spec", "rate_hz",
+    }
+)
+
+
+class SensorPort:
+    """One sensor as the robot's computer reads it: :meth:`read` and its static facts (:data:`SENSOR_FACTS`).
+
+    Camera readings come as :class:`CameraImage` (no true pose, no
+    segmentation); the others as the sensor's own data type.
+    """
+
+    __slots__ = ("name", "__sensor", "__image", "__depth")
+
+    def __init__(self, name: str, sensor: Sensor[Any], depth: bool = True):
+        self.name = name
+        self.__sensor = sensor
+        self.__image = hasattr(sensor, "intrinsics")
+        self.__depth = depth
+
+    def read(self) -> Reading[Any] | None:
+        """The newest readable sample (``None`` before the first); its ``stamp`` is the sample's sim time (s)."""
+        reading = self.__sensor.read()
+        if reading is None or not self.__image:
+            return reading
+        frame = reading.data
+        return Reading(reading.stamp, CameraImage(frame.rgb, frame.depth if self.__depth else None, frame.K))
+
+    def __getattr__(self, name: str) -> Any:
+        if name in SENSOR_FACTS:
+            if name == "rate_hz":
+                return self.__sensor.config.rate_hz
+            return getattr(self.__sensor, name)
+        raise AttributeError(f"sensor '{self.name}' exposes read() and {', '.join(sorted(SENSOR_FACTS))}; not '{name}'")
+
+    def __repr__(self) -> str:
+        return f"SensorPort({self.name!r})"
+
+
+class Onboard:
+    """Base of onboard interfaces: name, kind, sensors, state estimate, safe stop, static link model.
+
+    Subclasses add their kind's commands (listed in :attr:`commands`, which
+    the run's arbiter stamps) and device states.
+    """
+
+    #: method names that command the robot (stamped by the arbiter, see ``marsupial.trees.arbitration``)
+    commands: ClassVar[frozenset[str]] = frozenset({"safe_stop"})
+
+    __slots__ = ("name", "kind", "_Onboard__robot", "_Onboard__ports")
+
+    def __init__(self, robot: Robot):
+        self.name = robot.name
+        self.kind = robot.kind
+        self.__robot = robot
+        self.__ports: dict[str, SensorPort] = {}
+
+    @property
+    def _robot(self) -> Robot:
+        """The body behind this interface: for the world-side subclasses of this module only."""
+        return self.__robot
+
+    # ------------------------------------------------------------- sensing
+    def sensor(self, name: str) -> SensorPort:
+        """The sensor called ``name`` (short name, e.g. ``"sonar"``); the error lists this robot's sensors."""
+        port = self.__ports.get(name)
+        if port is None:
+            sensor = self.__robot.sensor(name)
+            short = sensor.name.split("/", 1)[-1]
+            port = self.__ports[name] = SensorPort(short, sensor, depth=getattr(sensor, "measures_depth", True))
+        return port
+
+    @property
+    def sensor_names(self) -> tuple[str, ...]:
+        """Short names of this robot's sensors."""
+        return tuple(n.split("/", 1)[-1] for n in self.__robot.sensors)
+
+    def estimate(self) -> StateEstimate:
+        """The robot's onboard state estimate now (see :mod:`marsupial.world.estimation`)."""
+        return self.__robot.estimator.estimate()
+
+    # ---------------------------------------------------------- the model
+    def link_offset(self, link: str) -> tuple[np.ndarray, np.ndarray]:
+        """Position (m) and rotation of ``link`` in the base frame, from the robot's URDF (rigid links)."""
+        return self.__robot.link_offset(link)
+
+    # ------------------------------------------------------------ commands
+    def safe_stop(self) -> None:
+        """Leave the robot safe (its kind's safe stop: hover, stop the wheels, hold the arm)."""
+        self.__robot.safe_stop()
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.name!r})"
+
+
+class BatteryOnboard(Onboard):
+    """A robot with a battery monitor: :meth:`battery` reads it."""
+
+    __slots__ = ()
+
+    def battery(self) -> Any:
+        """Latest battery-monitor sample (:class:`~marsupial.world.energy.BatteryStatus`: SOC %, V, A), ``None`` before one."""
+        reading = self.sensor("battery").read()
+        return None if reading is None else reading.data
+
+
+class QuadrotorOnboard(BatteryOnboard):
+    """A quadrotor's onboard computer: velocity commands, motors, estimator hand-over, arming and dock states."""
+
+    commands = frozenset({"command_velocity", "hover", "set_motors", "safe_stop", "reset_estimate"})
+    __slots__ = ()
+
+    def command_velocity(self, vx: float, vy: float, vz: float, yaw_rate: float = 0.0, frame: str = "body") -> None:
+        """Fly at ``(vx, vy, vz)`` m/s turning at ``yaw_rate`` rad/s; ``frame`` ``"body"`` (heading) or ``"world"``.
+
+        ``"world"`` is the estimator's navigation frame: the autopilot tracks
+        the command on the onboard estimate, as the vendor's firmware does.
+        """
+        self._robot.command_velocity(vx, vy, vz, yaw_rate, frame)  # type: ignore[attr-defined]
+
+    def hover(self) -> None:
+        """Hold the present (estimated) position."""
+        self._robot.hover()  # type: ignore[attr-defined]
+
+    def set_motors(self, on: bool) -> None:
+        """Start (arm) or stop the motors."""
+        self._robot.set_motors(on)  # type: ignore[attr-defined]
+
+    def reset_estimate(self, position: Sequence[float], yaw: float) -> None:
+        """Restart the onboard estimate at ``position`` (m) and ``yaw`` (rad), e.g. handed over by a carrier."""
+        self._robot.estimator.reset(np.asarray(position, dtype=float), float(yaw))
+
+    @property
+    def motors_on(self) -> bool:
+        """True while the motors run (the flight controller's arming state)."""
+        return bool(self._robot.motors_on)  # type: ignore[attr-defined]
+
+    @property
+    def docked(self) -> bool:
+        """True while a docking device holds the vehicle (its dock-lock signal)."""
+        return bool(self._robot.docked)  # type: ignore[attr-defined]
+
+    @property
+    def limits(self) -> Any:
+        """The kind's :class:`~marsupial.world.robots.quadrotor.FlightLimits` (datasheet)."""
+        return self._robot.limits  # type: ignore[attr-defined]
+
+    @property
+    def mass(self) -> float:
+        """Take-off mass (kg), from the datasheet."""
+        return float(self._robot.mass)  # type: ignore[attr-defined]
+
+    @property
+    def battery_capacity_mAh(self) -> float:
+        """Capacity of the pack (mAh)."""
+        return float(self._robot.battery.spec.capacity_mAh)  # type: ignore[attr-defined]
+
+
+class WheeledOnboard(Onboard):
+    """A wheeled base: drive commands, wheel-encoder speed, drive limits, footprint estimate."""
+
+    commands = frozenset({"drive", "stop", "safe_stop"})
+    __slots__ = ()
+
+    def drive(self, v: float, omega: float) -> None:
+        """Command forward speed ``v`` (m/s) and yaw rate ``omega`` (rad/s, CCW), clipped to the limits."""
+        self._robot.drive(v, omega)  # type: ignore[attr-defined]
+
+    def stop(self) -> None:
+        """Command zero speed."""
+        self._robot.stop()  # type: ignore[attr-defined]
+
+    def speed(self) -> float:
+        """Forward speed (m/s) from the wheel encoders."""
+        return float(self._robot.wheel_speed())  # type: ignore[attr-defined]
+
+    @property
+    def limits(self) -> Any:
+        """Drive limits (:class:`~marsupial.world.robots.diff_drive.DiffDriveLimits`)."""
+        return self._robot.limits  # type: ignore[attr-defined]
+
+    def footprint_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """Estimated pose of ``base_footprint``: position (m), quaternion, in the estimate's frame."""
+        estimate = self.estimate()
+        return estimate.position, estimate.orientation
+
+
+class PlatformOnboard(WheeledOnboard):
+    """A ground robot carrying a landing platform (``summit_xl``): its size and mount from the model."""
+
+    __slots__ = ()
+
+    @property
+    def platform_size(self) -> tuple[float, float]:
+        """Platform length and width (m)."""
+        return self._robot.platform_size  # type: ignore[attr-defined]
+
+
+class DockingPort:
+    """Part A's docking device as the carrier's computer drives and reads it (Narváez §IV-C).
+
+    Commands: :meth:`magnet_on`, :meth:`magnet_off`, :meth:`lock`,
+    :meth:`release`. Device states: :attr:`magnet` (coil energised),
+    :attr:`contact_switch` (Part B seated in the cone: the limit switch
+    under Part A's face), :attr:`locked` (lever end switch), :attr:`locking`.
+    """
+
+    __slots__ = ("_DockingPort__device",)
+
+    def __init__(self, device: Any):
+        self.__device = device
+
+    def magnet_on(self) -> None:
+        """Energise the electromagnet."""
+        self.__device.magnet_on()
+
+    def magnet_off(self) -> None:
+        """De-energise the electromagnet."""
+        self.__device.magnet_off()
+
+    def lock(self) -> bool:
+        """Start closing the levers; False when the contact switch is open (nothing to lock)."""
+        return bool(self.__device.lock())
+
+    def release(self) -> None:
+        """Open the levers and switch the magnet off."""
+        self.__device.release()
+
+    @property
+    def magnet(self) -> bool:
+        """True while the coil is energised."""
+        return bool(self.__device.magnet)
+
+    @property
+    def contact_switch(self) -> bool:
+        """True while a Part B rests seated on Part A (the cone's limit switch)."""
+        return bool(self.__device.contact_switch())
+
+    @property
+    def locked(self) -> bool:
+        """True while the levers hold a UAV (their end switch)."""
+        return self.__device.docked is not None
+
+    @property
+    def locking(self) -> bool:
+        """True while the levers are closing."""
+        return bool(self.__device.locking)
+
+    @property
+    def state(self) -> str:
+        """``"locked"``, ``"magnet"`` or ``"open"`` (from the switches and the coil)."""
+        return str(self.__device.state)
+
+    @property
+    def capture_distance(self) -> float:
+        """The magnet's reach (m), from its datasheet."""
+        return float(self.__device.capture_distance)
+
+
+class CarrierOnboard(WheeledOnboard):
+    """The mobile manipulator's computer: base, arm (encoders, kinematics), docking device, cameras, LiDAR."""
+
+    commands = frozenset({"drive", "stop", "safe_stop", "set_joint_targets", "hold_arm"})
+    __slots__ = ("docking",)
+
+    def __init__(self, robot: Robot):
+        super().__init__(robot)
+        self.docking = DockingPort(robot.docking)  # type: ignore[attr-defined]
+
+    def set_joint_targets(self, q: str | Sequence[float]) -> None:
+        """Move the arm toward ``q`` (6 angles in rad, or a named pose)."""
+        self._robot.set_joint_targets(q)  # type: ignore[attr-defined]
+
+    def hold_arm(self) -> None:
+        """Hold every arm joint where its encoder reads it now."""
+        self._robot.hold_arm()  # type: ignore[attr-defined]
+
+    def joint_positions(self) -> np.ndarray:
+        """Arm joint angles (rad) from the joint encoders."""
+        return self._robot.arm_encoders()  # type: ignore[attr-defined, no-any-return]
+
+    def joint_targets(self) -> np.ndarray:
+        """Arm joint targets being tracked (rad)."""
+        return self._robot.joint_targets()  # type: ignore[attr-defined, no-any-return]
+
+    def arm_at_target(self, tolerance: float = 0.01) -> bool:
+        """True when every encoder reads within ``tolerance`` rad of its target."""
+        return bool(np.all(np.abs(self.joint_targets() - self.joint_positions()) <= tolerance))
+
+    @property
+    def joint_limits(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper joint limits (rad)."""
+        return self._robot.joint_limits  # type: ignore[attr-defined, no-any-return]
+
+    @property
+    def arm_kinematics(self) -> Any:
+        """pinocchio model of the arm (``arm_base`` = frame M → ``part_a``), from the URDF."""
+        return self._robot.arm_kinematics  # type: ignore[attr-defined]
+
+    def arm_pose(self, name: str) -> np.ndarray:
+        """Joint angles (rad) of a named arm pose."""
+        return self._robot.arm_pose(name)  # type: ignore[attr-defined, no-any-return]
+
+    def arm_base_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """Estimated pose of frame M: the base estimate composed with M's mount in the URDF (position m, quaternion)."""
+        estimate = self.estimate()
+        p_M_base, R_base_M = self.link_offset("arm_base")
+        R = estimate.rotation
+        return estimate.position + R @ p_M_base, quaternion_from_matrix(R @ R_base_M)
+
+
+def onboard_of(robot: Robot) -> Onboard:
+    """The onboard interface of ``robot`` (its class's ``onboard_class``), built once and kept on the robot."""
+    port = getattr(robot, "_onboard", None)
+    if port is None:
+        port = robot.onboard_class(robot)
+        robot._onboard = port
+    return port  # type: ignore[no-any-return]
+
+
+def base_frame_offset(p_base: np.ndarray, q_base: np.ndarray, p_link: np.ndarray, q_link: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Position (m) and rotation of a link in its base frame, from the two world poses (model set-up only)."""
+    R_base = rotation_matrix(q_base)
+    return R_base.T @ (np.asarray(p_link) - np.asarray(p_base)), R_base.T @ rotation_matrix(q_link)
+

@@ -1,0 +1,125 @@
+"""The team link: what robots tell each other over the radio, late and sometimes not at all.
+
+Every team member's onboard estimate is broadcast as ``estimate`` telemetry
+at :attr:`TeamLinkConfig.telemetry_hz`; skills may send their own messages
+(image features, requests) with :meth:`TeamLink.send`. A message is
+delivered ``latency_s`` (plus a seeded jitter) after it was sent, or lost
+with probability ``drop``; a receiver sees the newest delivered message of
+each sender and topic (:meth:`TeamLink.latest`). Simulated time throughout.
+
+Default figures (scaled by ``world.sensing.noise_scale``): 802.11 telemetry
+between robots a few metres apart, 20 ms one-way latency with 10 ms jitter
+and 2 % loss, the order reported for ROS-over-Wi-Fi multi-robot links (see
+the sources table in ``docs/world.md``).
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .world import World
+
+
+@dataclass(frozen=True)
+class TeamLinkConfig:
+    """Latency (s), its jitter (s, standard deviation), loss probability and estimate telemetry rate (Hz)."""
+
+    latency_s: float = 0.02
+    jitter_s: float = 0.01
+    drop: float = 0.02
+    telemetry_hz: float = 20.0
+
+    def __post_init__(self) -> None:
+        if self.latency_s < 0 or self.jitter_s < 0 or not 0.0 <= self.drop <= 1.0 or self.telemetry_hz <= 0:
+            raise ValueError(
+                "team link needs latency_s >= 0, jitter_s >= 0, 0 <= drop <= 1 and telemetry_hz > 0; "
+                f"got {self.latency_s}, {self.jitter_s}, {self.drop}, {self.telemetry_hz}"
+            )
+
+    def scaled(self, noise_scale: float) -> TeamLinkConfig:
+        """This link with latency, jitter and loss multiplied by ``noise_scale`` (loss capped at 1)."""
+        return TeamLinkConfig(
+            self.latency_s * noise_scale, self.jitter_s * noise_scale, min(1.0, self.drop * noise_scale), self.telemetry_hz
+        )
+
+
+@dataclass(frozen=True)
+class Message:
+    """One delivered message: sender, topic, send and delivery times (s), payload."""
+
+    sender: str
+    topic: str
+    sent: float
+    delivered: float
+    payload: Any
+
+
+class TeamLink:
+    """The radio shared by one world's team (an actor: it delivers due messages every physics step)."""
+
+    def __init__(self, world: World, config: TeamLinkConfig | None = None):
+        self.world = world
+        self.config = config or TeamLinkConfig()
+        self.rng = world.rng_for("team_link")
+        self._queue: list[tuple[int, int, Message]] = []
+        self._order = itertools.count()
+        self._latest: dict[tuple[str, str], Message] = {}
+        self._telemetry_period = max(1, world.clock.steps_for(1.0 / self.config.telemetry_hz))
+        self.sent = 0
+        self.dropped = 0
+
+    def send(self, sender: str, topic: str, payload: Any) -> None:
+        """Broadcast ``payload`` from ``sender`` on ``topic`` now; it arrives later or is lost."""
+        cfg, clock = self.config, self.world.clock
+        self.sent += 1
+        if cfg.drop > 0 and self.rng.random() < cfg.drop:
+            self.dropped += 1
+            return
+        delay = cfg.latency_s + (abs(float(self.rng.normal(0.0, cfg.jitter_s))) if cfg.jitter_s > 0 else 0.0)
+        due = clock.steps + clock.steps_for(delay)
+        message = Message(sender, topic, clock.now, due * clock.dt, payload)
+        heapq.heappush(self._queue, (due, next(self._order), message))
+
+    def latest(self, sender: str, topic: str) -> Message | None:
+        """The newest message delivered so far from ``sender`` on ``topic`` (``None``: nothing yet)."""
+        return self._latest.get((sender, topic))
+
+    # ------------------------------------------------------------ stepping
+    def pre_physics(self, dt: float) -> None:
+        """Nothing before physics."""
+
+    def post_physics(self, dt: float) -> None:
+        """Deliver the messages that are due; broadcast every robot's estimate at the telemetry rate."""
+        steps = self.world.clock.steps
+        queue = self._queue
+        while queue and queue[0][0] <= steps:
+            message = heapq.heappop(queue)[2]
+            key = (message.sender, message.topic)
+            known = self._latest.get(key)
+            if known is None or known.sent <= message.sent:  # a late older message does not replace a newer one
+                self._latest[key] = message
+        if steps % self._telemetry_period == 0:
+            for name, robot in self.world.robots.items():
+                self.send(name, "estimate", robot.estimator.estimate())
+
+
+class LinkPort:
+    """The team link as one robot's computer uses it: send as that robot, read what the others sent."""
+
+    __slots__ = ("name", "_LinkPort__link")
+
+    def __init__(self, link: TeamLink, name: str):
+        self.name = name
+        self.__link = link
+
+    def send(self, topic: str, payload: Any) -> None:
+        """Broadcast ``payload`` on ``topic`` as this robot."""
+        self.__link.send(self.name, topic, payload)
+
+    def latest(self, sender: str, topic: str = "estimate") -> Message | None:
+        """The newest delivered message of ``sender`` on ``topic`` (default: its estimate telemetry)."""
+        return self.__link.latest(sender, topic)
