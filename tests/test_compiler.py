@@ -209,6 +209,9 @@ def test_robot_kind_and_robot_presence_are_checked(tmp_path):
     err = compile_error(tmp_path, "until: {skill: wait}\ncondition: {battery_below: 0.2, robot: ugv}", team=UGV_TEAM)
     assert str(err).endswith("condition 'battery_below' cannot run on 'ugv' (a summit_xl); "
                              "expected a robot whose kind or class is Quadrotor")  # no battery: at compile time
+    err = compile_error(tmp_path, "until: {skill: wait}\ncondition: {obstacle_ahead: 1.0, robot: ugv}", team=UGV_TEAM)
+    assert str(err).endswith("condition 'obstacle_ahead' cannot run on 'ugv' (a summit_xl); "
+                             "expected a robot whose kind or class is MobileManipulator")  # no LiDAR
     err = compile_error(tmp_path, "skill: wait\nrobot: uav")
     assert "takes no robot" in str(err)
     two = "team:\n  a: {robot: bebop2}\n  b: {robot: tello}\n"
