@@ -15,6 +15,7 @@ Positions m, rotations 3×3 (columns: the mounted frame's axes).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -41,10 +42,26 @@ def sensor_mount(
     return p, R
 
 
-def in_nav_frame(estimate: Any, mount: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-    """Position (m) and rotation in the navigation frame of a frame mounted at ``mount`` (body frame) on an estimated body."""
-    R_nav_body = estimate.rotation
-    return estimate.position + R_nav_body @ mount[0], R_nav_body @ mount[1]
+def body_pose(estimate: Any, t: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The estimated body position (m) and ``R_nav_body`` at ``t`` (s; default: the estimate's stamp).
+
+    Propagated from the estimate with its velocity and yaw rate (constant
+    over ``t − stamp``), e.g. back to the stamp of a late camera frame.
+    """
+    R = estimate.rotation
+    p = np.asarray(estimate.position, dtype=float)
+    dt = 0.0 if t is None else t - estimate.stamp
+    if dt == 0.0:
+        return p, R
+    yaw = float((R @ np.asarray(estimate.angular_velocity, dtype=float))[2]) * dt  # body rates → about nav z
+    c, s = math.cos(yaw), math.sin(yaw)
+    return p + np.asarray(estimate.velocity, dtype=float) * dt, np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ R
+
+
+def in_nav_frame(body: tuple[np.ndarray, np.ndarray], mount: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Position (m) and rotation in the navigation frame of a frame mounted at ``mount`` (body frame) on a body at ``body``."""
+    p_nav_body, R_nav_body = body
+    return p_nav_body + R_nav_body @ mount[0], R_nav_body @ mount[1]
 
 
 def scan_in_body(scan: Any, mount: tuple[np.ndarray, np.ndarray]) -> np.ndarray:

@@ -53,7 +53,7 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
-from marsupial.sensing import in_nav_frame, scan_in_body, sensor_mount
+from marsupial.sensing import body_pose, in_nav_frame, scan_in_body, sensor_mount
 from marsupial.trees.skill import NodeParams, Skill
 
 MAX_SPEED = 2.0  # m/s, UGV longitudinal speed limit, Narváez §V-B-1
@@ -91,7 +91,7 @@ def resample(points: np.ndarray, spacing: float = RESAMPLE_SPACING) -> tuple[np.
 
 
 class PathFollower:
-    """Progress along a smoothed, resampled path and the pure-pursuit look-ahead point (world frame, m).
+    """Progress along a smoothed, resampled path and the pure-pursuit look-ahead point (navigation frame, m).
 
     Args:
         guide: guide polyline ``(n, 2)``.
@@ -474,14 +474,14 @@ class Navigate(Skill):
     def obstacles_in_robot_frame(self, estimate, R_robot_world: np.ndarray) -> np.ndarray:
         """LiDAR echoes within ``sensor_range`` in the robot frame (m).
 
-        Each new scan is placed in the navigation frame with the estimate at
-        the time it is read, and kept there (moving with the estimate) until
-        the next one.
+        Each new scan is placed in the navigation frame with the estimate
+        propagated to the scan's stamp, and kept there until the next one.
         """
         reading = self.lidar.read()
         if reading is not None and reading is not self.last_scan:
             self.last_scan = reading
-            self.obstacles = scan_in_body(reading.data, in_nav_frame(estimate, self.lidar_mount))[:, :2]
+            lidar_pose = in_nav_frame(body_pose(estimate, reading.stamp), self.lidar_mount)
+            self.obstacles = scan_in_body(reading.data, lidar_pose)[:, :2]
         local = (self.obstacles - estimate.position[:2]) @ R_robot_world.T
         return local[np.einsum("ij,ij->i", local, local) <= self.params.sensor_range**2]
 

@@ -13,8 +13,8 @@ import pytest
 from py_trees.common import Status
 from skill_harness import Harness
 
-from marsupial.geometry import yaw_of
-from marsupial.sensing import in_nav_frame, sensor_mount
+from marsupial.geometry import quaternion_from_yaw, yaw_of
+from marsupial.sensing import body_pose, in_nav_frame, sensor_mount
 from marsupial.skills.uav_docking.coverage import (
     FlightMap,
     detect_colour,
@@ -28,6 +28,7 @@ from marsupial.skills.uav_docking.explore import Explore
 from marsupial.trees.replay import read_log
 from marsupial.trees.runner import run_mission
 from marsupial.world import World
+from marsupial.world.estimation import StateEstimate
 from marsupial.world.onboard import onboard_of
 from marsupial.world.priors import BuildingPlan
 
@@ -101,8 +102,9 @@ def front_camera(uav):
     onboard = onboard_of(uav)
     port = onboard.sensor("front_camera")
     mount = sensor_mount(onboard, "camera_front", port.offset, port.R_link_optical)
-    position, R = in_nav_frame(onboard.estimate(), mount)
-    return port.read().data, position, R
+    reading = port.read()
+    position, R = in_nav_frame(body_pose(onboard.estimate(), reading.stamp), mount)
+    return reading.data, position, R
 
 
 def flight_map(world):
@@ -172,3 +174,11 @@ def test_target_is_detected_by_its_colour_only_where_the_camera_sees_it():
     assert abs(point[0] - target.position[0]) < 0.3
     assert floor_point(frame.K, position, R, (160.0, 0.0)) is None  # above the horizon: no floor
     assert detect_colour(frame.rgb, (255, 120, 20), min_pixels=blob.area + 1) is None
+
+
+def test_a_late_frame_is_placed_with_the_estimate_propagated_back_to_its_stamp():
+    turning = StateEstimate(2.0, "odom", np.array([1.0, 2.0, 1.5]), quaternion_from_yaw(0.5),
+                            np.array([0.2, 0.0, 0.0]), np.array([0.0, 0.0, 1.2]))
+    p, R = body_pose(turning, 1.9)  # a frame 0.1 s old, taken while sweeping at 1.2 rad/s
+    assert p == pytest.approx([0.98, 2.0, 1.5]) and math.atan2(R[1, 0], R[0, 0]) == pytest.approx(0.5 - 0.12)
+    assert body_pose(turning)[0] == pytest.approx(turning.position)

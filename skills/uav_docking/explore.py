@@ -70,7 +70,7 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
-from marsupial.sensing import in_nav_frame, sensor_mount
+from marsupial.sensing import body_pose, in_nav_frame, sensor_mount
 from marsupial.trees.skill import NodeParams, Skill
 from marsupial.world.errors import UnknownNameError
 
@@ -382,13 +382,17 @@ class Explore(Skill):
         self.context.metric("coverage", coverage, robot=self.robot_name)
 
     def look(self, estimate) -> None:
-        """Survey with the front camera's latest frame: mark the cells in its view of the plan, look for the target."""
+        """Survey with the front camera's latest frame: mark the cells in its view of the plan, look for the target.
+
+        The camera pose is the UAV estimate propagated back to the frame's
+        stamp (a late frame was taken earlier) composed with the camera's mount.
+        """
         reading = self.camera.read()
         if reading is None:
             return
         p = self.params
         frame = reading.data
-        position, R_nav_optical = in_nav_frame(estimate, self.camera_mount)
+        position, R_nav_optical = in_nav_frame(body_pose(estimate, reading.stamp), self.camera_mount)  # at the frame's stamp
         bearings = view_bearings(frame.K, frame.rgb.shape[1], R_nav_optical)
         ranges = plan_ranges(self.map, position[:2], bearings, p.view_range)
         self.seen |= visible_cells(self.map, position[:2], bearings, ranges, p.view_range)
