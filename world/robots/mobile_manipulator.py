@@ -44,6 +44,7 @@ from ..sensors.lidar import Lidar, LidarSpec
 from .arm import RPM, ArmController
 from .diff_drive import DiffDriveLimits
 from .docking_device import DockingDevice
+from .encoders import JointEncoders
 from .wheeled import WheeledRobot
 
 if TYPE_CHECKING:
@@ -153,6 +154,7 @@ class MobileManipulator(WheeledRobot):
             ``rate_hz, noise_std, dropout, latency_s, fov_deg, resolution_deg,
             max_range, start_range, beam_dropout``.
         docking: keyword overrides of :class:`DockingDevice` (e.g. ``{"capture_distance": 0.02}``).
+        localization: ``"odometry"`` or ``"map"`` (see :class:`WheeledRobot`).
 
     Attributes:
         arm: the joint PID controller (:class:`ArmController`).
@@ -173,6 +175,7 @@ class MobileManipulator(WheeledRobot):
         name: str,
         pose: Sequence[float] = (0.0, 0.0, 0.0),
         limits: DiffDriveLimits | Mapping[str, float] | None = None,
+        localization: str = "odometry",
         arm_pose: str | Sequence[float] = "stowed",
         sensors: Mapping[str, Mapping[str, Any]] | None = None,
         docking: Mapping[str, Any] | None = None,
@@ -180,7 +183,7 @@ class MobileManipulator(WheeledRobot):
         sensor_specs = _sensor_specs(self.kind, sensors or {})  # bad settings fail before anything is built
         docking_settings = _docking_settings(docking or {})
         initial_q = self._configuration(arm_pose)
-        super().__init__(world, name, pose=pose, limits=limits)
+        super().__init__(world, name, pose=pose, limits=limits, localization=localization)
         cid = self.cid
         joints = {}
         for j in range(pybullet.getNumJoints(self.body_id, physicsClientId=cid)):
@@ -200,6 +203,7 @@ class MobileManipulator(WheeledRobot):
         )
         self.arm_kinematics = ArmKinematics.from_urdf(self.urdf, ARM_BASE_LINK, PART_A_LINK)
         self.reset_arm(initial_q)
+        self.encoders = JointEncoders(world, f"{name}/arm")
         self.docking = DockingDevice(self, PART_A_LINK, **docking_settings)
         self._add_sensors(sensor_specs)
 
@@ -265,8 +269,8 @@ class MobileManipulator(WheeledRobot):
 
     @simulates_hardware
     def arm_encoders(self) -> np.ndarray:
-        """Arm joint angles as the joint encoders read them (rad). PROVISIONAL: exact until the encoder model lands."""
-        return self.arm.positions()
+        """Arm joint angles as the joint encoders read them (rad; Dynamixel 12-bit, :mod:`.encoders`)."""
+        return self.encoders.read(self.arm.positions())
 
     def joint_velocities(self) -> np.ndarray:
         """Arm joint speeds now (rad/s)."""

@@ -98,10 +98,11 @@ class ChildUGV(WheeledRobot):
         name: str,
         pose: Sequence[float] = (0.0, 0.0, 0.0),
         limits: DiffDriveLimits | Mapping[str, float] | None = None,
+        localization: str = "odometry",
         camera_resolution: Sequence[int] = CAMERA_RESOLUTION,
         camera: Mapping[str, Any] | None = None,
     ):
-        super().__init__(world, name, pose=pose, limits=limits)
+        super().__init__(world, name, pose=pose, limits=limits, localization=localization)
         (shape,) = pybullet.getCollisionShapeData(self.body_id, -1, physicsClientId=self.cid)
         self.size: tuple[float, float] = (float(shape[3][0]), float(shape[3][1]))
         self.carrier: MotherUGV | None = None
@@ -183,8 +184,9 @@ class MotherUGV(WheeledRobot):
         name: str,
         pose: Sequence[float] = (0.0, 0.0, 0.0),
         limits: DiffDriveLimits | Mapping[str, float] | None = None,
+        localization: str = "odometry",
     ):
-        super().__init__(world, name, pose=pose, limits=limits)
+        super().__init__(world, name, pose=pose, limits=limits, localization=localization)
         self.entrance_width = ENTRANCE_WIDTH_M
         self.lift_travel = LIFT_TRAVEL_M
         self.lift_joint = self.link_index("lift_platform")  # a link's index is its parent joint's
