@@ -31,6 +31,7 @@ from marsupial.world import World
 from marsupial.world.estimation import StateEstimate
 from marsupial.world.onboard import onboard_of
 from marsupial.world.priors import BuildingPlan
+from marsupial.world.team_link import TeamLinkConfig
 
 D_E, D_TEAM = 1.5, 4.5  # m: smaller than the defaults so that a short run meets both constraints many times
 
@@ -193,3 +194,15 @@ def test_a_late_frame_is_placed_with_the_estimate_propagated_back_to_its_stamp()
     p, R = body_pose(turning, 1.9)  # a frame 0.1 s old, taken while sweeping at 1.2 rad/s
     assert p == pytest.approx([0.98, 2.0, 1.5]) and math.atan2(R[1, 0], R[0, 0]) == pytest.approx(0.5 - 0.12)
     assert body_pose(turning)[0] == pytest.approx(turning.position)
+
+
+def test_without_the_carriers_telemetry_the_uav_hovers_and_waits():
+    with World(scene="usar_building", seed=0, team_link=TeamLinkConfig(drop=1.0)) as world:  # every message lost
+        world.add_robot("mobile_manipulator", "carrier", pose=[-13, -7, 0.73])
+        uav = world.add_robot("bebop2", "uav", pose=[-11.0, -7.0, 1.2, 0.0])
+        start = uav.pose()[0]
+        harness = Harness(world)
+        explore = harness.node(Explore, "uav")
+        assert harness.run(explore, 3.0) == Status.RUNNING
+        assert explore.feedback_message == "waiting for carrier's telemetry"
+        assert np.linalg.norm(uav.pose()[0] - start) < 0.2
