@@ -104,10 +104,10 @@ class ObstacleAhead(Condition):
 
     def check(self) -> bool:
         p = self.params
-        reading = self.robot.sensor(p.sensor).read()
+        port = self.robot.sensor(p.sensor)
+        reading = port.read()
         if reading is None:
             return False
-        port = self.robot.sensor(p.sensor)
         echoes = scan_in_body(reading.data, sensor_mount(self.robot, p.sensor, port.offset))
         x, y = echoes[:, 0], echoes[:, 1]
         return bool(np.any((x >= p.front) & (x <= p.front + p.distance) & (np.abs(y) <= 0.5 * p.width)))
