@@ -350,7 +350,10 @@ class Quadrotor(Robot):
         self.add_sensor(BatteryGauge(self.world, f"{self.name}/battery", self.battery, cfg["battery"]))
         for cam in self.spec.cameras:
             intrinsics = Intrinsics(cam.width, cam.height, cam.fov_v_deg)
-            camera = Camera(self, cam.name, intrinsics, cfg[cam.name], link=cam.link, R_link_optical=cam.R_link_optical)
+            camera = Camera(
+                self, cam.name, intrinsics, cfg[cam.name], link=cam.link, R_link_optical=cam.R_link_optical,
+                measures_depth=False,  # monocular RGB cameras
+            )
             self.add_sensor(camera)
 
     # ------------------------------------------------------------ commands
