@@ -319,6 +319,7 @@ class Quadrotor(Robot):
             self.sensors[f"{name}/sonar"],  # type: ignore[arg-type]
             self.sensors[f"{name}/barometer"],  # type: ignore[arg-type]
             floor_height=floor,
+            landed_height=spec.landed_height,
             sonar_offset_z=spec.sonar.offset[2],
             position=tuple(float(c) for c in position),  # type: ignore[arg-type]
             yaw=yaw_of(orientation),
