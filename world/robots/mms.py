@@ -77,7 +77,7 @@ MMS_LIMITS = DiffDriveLimits(max_speed=1.0, max_omega=1.0, max_accel=0.5, max_al
 CAMERA_INTRINSICS = Intrinsics(320, 240, 58.0, near=0.1, far=10.0)
 """Eye-in-hand RGB-D camera (the paper names none): a RealSense-class 58° vertical field
 of view and 0.1 m minimum depth, at 320×240 to keep rendering cheap."""
-CAMERA_CONFIG = SensorConfig(rate_hz=15.0, noise_std=2.0)  # RGB noise in 0-255 intensity
+CAMERA_CONFIG = SensorConfig(rate_hz=15.0, noise_std=2.0, latency_s=0.05)  # RGB noise 0-255; latency chosen
 CAMERA_DEPTH_NOISE_PER_M = 0.002  # depth noise std per metre of depth (≈0.2 %)
 
 ARM_READY = (0.0, -0.3, 2.2, 0.0, 1.2, 0.0)

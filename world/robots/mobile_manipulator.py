@@ -87,16 +87,22 @@ ARM_POSES: dict[str, tuple[float, ...]] = {
 _EYE_IN_HAND = {
     # PS Eye (§V-B): 640×480 at 60 Hz; its wide lens setting (75° horizontal) gives 60° vertically at 4:3
     "rate_hz": 60.0, "width": 640, "height": 480, "fov_v_deg": 60.0, "near": 0.02, "far": 10.0,
+    # USB webcam: pixel noise (0-255), 1 % lost frames, 50 ms capture latency (chosen, see docs/world.md)
+    "noise_std": 2.0, "dropout": 0.01, "latency_s": 0.05,
 }
 _FRONT_RGBD = {
     # RealSense D435 (§V-B): depth FOV 87°×58°, 0.1–10 m; 640×480 natively, 320×240 by default for speed
     "rate_hz": 30.0, "width": 320, "height": 240, "fov_v_deg": 58.0, "near": 0.1, "far": 10.0,
     "depth_noise_per_m": 0.02,  # 1σ depth error per metre of depth: RMS error ≤ 2 % at 2 m (D435 data sheet)
+    "noise_std": 2.0, "latency_s": 0.05,  # chosen, see docs/world.md
 }
 _LIDAR = {
     # Sick LMS111-10100 (§V-B): 270°, 0.5° at 50 Hz, 20 m, 12 mm statistical error (1σ)
     "rate_hz": 50.0, "noise_std": 0.012,
+    "beam_dropout": 0.002,  # lost echoes (dark, glossy or grazing surfaces; chosen)
 }
+DEPTH_CAMERAS = frozenset({"front_rgbd"})
+"""Cameras whose depth image the carrier's computer receives (the PS Eye is a plain RGB webcam)."""
 
 
 def _split_settings(
@@ -211,7 +217,10 @@ class MobileManipulator(WheeledRobot):
         def camera(name: str) -> Camera:
             config, intrinsics, extra = specs[name]
             link = SENSOR_LINKS[name]
-            return Camera(self, name, intrinsics, config, link=link, R_link_optical=np.eye(3), **extra)
+            return Camera(
+                self, name, intrinsics, config, link=link, R_link_optical=np.eye(3),
+                measures_depth=name in DEPTH_CAMERAS, **extra,
+            )
 
         config, spec, _ = specs["lidar"]
         self.eye_in_hand: Camera = self.add_sensor(camera("eye_in_hand"))  # type: ignore[assignment]

@@ -319,6 +319,7 @@ class Quadrotor(Robot):
             self.sensors[f"{name}/sonar"],  # type: ignore[arg-type]
             self.sensors[f"{name}/barometer"],  # type: ignore[arg-type]
             floor_height=floor,
+            landed_height=spec.landed_height,
             sonar_offset_z=spec.sonar.offset[2],
             position=tuple(float(c) for c in position),  # type: ignore[arg-type]
             yaw=yaw_of(orientation),
@@ -350,7 +351,10 @@ class Quadrotor(Robot):
         self.add_sensor(BatteryGauge(self.world, f"{self.name}/battery", self.battery, cfg["battery"]))
         for cam in self.spec.cameras:
             intrinsics = Intrinsics(cam.width, cam.height, cam.fov_v_deg)
-            camera = Camera(self, cam.name, intrinsics, cfg[cam.name], link=cam.link, R_link_optical=cam.R_link_optical)
+            camera = Camera(
+                self, cam.name, intrinsics, cfg[cam.name], link=cam.link, R_link_optical=cam.R_link_optical,
+                measures_depth=False,  # monocular RGB cameras
+            )
             self.add_sensor(camera)
 
     # ------------------------------------------------------------ commands

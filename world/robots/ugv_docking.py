@@ -57,7 +57,8 @@ if TYPE_CHECKING:
 ENTRANCE_WIDTH_M = 0.19  # b_e, Table 1 (the slot of mother_ugv.urdf)
 CAMERA_RESOLUTION = (640, 480)  # W × H, Table 1
 CAMERA_FOV_V_DEG = 61.0  # θ_f, Table 1 (vertical, see module docstring)
-CAMERA_CONFIG = SensorConfig(rate_hz=10.0)  # embedded CMOS camera; rate not given
+# embedded CMOS camera (rate not given): pixel noise, 1 % lost frames, 0.1 s latency (chosen, docs/world.md)
+CAMERA_CONFIG = SensorConfig(rate_hz=10.0, noise_std=3.0, dropout=0.01, latency_s=0.1)
 LIFT_TRAVEL_M = 0.30  # platform travel from the floor to the storage capsule (not given)
 LIFT_SPEED_MPS = 0.05  # m/s (not given)
 LIFT_FORCE_N = 300.0  # lift motor force limit (N)
@@ -115,6 +116,7 @@ class ChildUGV(WheeledRobot):
                 CAMERA_CONFIG.with_overrides(camera),
                 link="camera_link",
                 R_link_optical=OPTICAL_FORWARD,
+                measures_depth=False,
             )
         )
 
