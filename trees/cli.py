@@ -315,3 +315,7 @@ def campaign(mission: str, trials: int, base_seed: int, sets: tuple[str, ...], v
 def main(argv: list[str] | None = None) -> None:
     """Console-script entry point (``marsupial``)."""
     cli.main(args=argv, prog_name="marsupial")
+
+
+if __name__ == "__main__":
+    main()
