@@ -46,7 +46,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Annotated, Any
 
 import cv2
 import numpy as np
@@ -364,7 +364,7 @@ class Navigate(Skill):
     """Drive a ground robot along a guide path or operator set-points, avoiding obstacles seen by its LiDAR."""
 
     class Params(NodeParams):
-        path: str | list[tuple[float, float]] | None = "operator_path"
+        path: str | list[Annotated[list[float], Field(min_length=2, max_length=2)]] | None = "operator_path"
         """Guide path γ_mm (§V-A): a path of the mission's building plan or [x, y] way-points (m, navigation frame); none: set-points only."""
         setpoints_key: str | None = None
         """Blackboard key of operator set-points ([x, y] or a list of them, m, navigation frame, §V-B); they replace the path."""

@@ -98,20 +98,24 @@ def test_coverage_is_written_for_area_explored(log):
     assert coverage.max() > 0.3
 
 
-def front_camera(uav):
-    """The front camera's latest frame and the camera pose the UAV estimates (estimate ∘ URDF mount), as explore has them."""
+def front_camera(world, uav):
+    """The front camera's next frame and the camera pose the UAV estimated at its stamp (estimate ∘ URDF mount).
+
+    A camera samples when read and delivers the frame a latency later (or
+    drops it): the world is stepped by ticks until one arrives.
+    """
     onboard = onboard_of(uav)
     port = onboard.sensor("front_camera")
     mount = sensor_mount(onboard, "camera_front", port.offset, port.R_link_optical)
-    reading = port.read()  # a camera samples when read and delivers its frame a latency later
-    position, R = in_nav_frame(body_pose(onboard.estimate(), reading.stamp), mount)
-    return reading.data, position, R
-
-
-def front_camera_request(*uavs):
-    """Ask the front cameras for a frame now (a camera samples when read; the frame arrives a latency later)."""
-    for uav in uavs:
-        onboard_of(uav).sensor("front_camera").read()
+    asked = world.now
+    port.read()
+    for _ in range(20):
+        world.step(0.1)
+        reading = port.read()
+        if reading is not None and reading.stamp >= asked:
+            position, R = in_nav_frame(body_pose(onboard.estimate(), reading.stamp), mount)
+            return reading.data, position, R
+    raise AssertionError("no front-camera frame in 2 s")
 
 
 def flight_map(world):
@@ -123,9 +127,7 @@ def test_walls_of_the_plan_hide_what_is_behind_them_from_the_coverage():
         grid = flight_map(world)
         # in the hall 1.5 m from its north wall (y = 4, solid for x -9.3..-5.1), facing it
         uav = world.add_robot("bebop2", "uav", pose=[-7.2, 2.5, 1.5, math.pi / 2])
-        front_camera_request(uav)
-        world.step(0.3)
-        frame, position, R = front_camera(uav)
+        frame, position, R = front_camera(world, uav)
     bearings = view_bearings(frame.K, frame.rgb.shape[1], R)
     assert np.ptp(bearings) == pytest.approx(math.radians(80), abs=math.radians(8))  # the Bebop's horizontal field
     ranges = plan_ranges(grid, position[:2], bearings, 6.0)
@@ -172,11 +174,9 @@ def test_target_is_detected_by_its_colour_only_where_the_camera_sees_it():
     with World(scene="usar_building", seed=0) as world:
         outside = world.add_robot("bebop2", "outside", pose=[12.9, -1.5, 1.5, -math.pi / 2])  # in the lobby, facing the target
         inside = world.add_robot("bebop2", "inside", pose=[12.9, -4.0, 1.5, -math.pi / 2])  # in the target room, 3.6 m away
-        front_camera_request(outside, inside)
-        world.step(0.3)
-        frame, _, _ = front_camera(outside)  # the room's north wall (y = -3) between them
+        frame, _, _ = front_camera(world, outside)  # the room's north wall (y = -3) between them
         assert detect_colour(frame.rgb, (255, 120, 20)) is None
-        frame, position, R = front_camera(inside)
+        frame, position, R = front_camera(world, inside)
         target = world.scene.object("target")
     blob = detect_colour(frame.rgb, (255, 120, 20))
     assert blob is not None and blob.area > 200

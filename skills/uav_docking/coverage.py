@@ -310,19 +310,20 @@ class Blob:
     bottom: tuple[float, float]
 
 
-def detect_colour(rgb: np.ndarray, colour: tuple[int, int, int], min_pixels: int = 20, hue_tolerance: int = 6) -> Blob | None:
+def detect_colour(rgb: np.ndarray, colour: tuple[int, int, int], min_pixels: int = 40, hue_tolerance: int = 6) -> Blob | None:
     """The largest blob of pixels of ``colour`` (0-255 RGB, a saturated one) in an ``(h, w, 3)`` uint8 frame, or ``None``.
 
     A pixel matches when its OpenCV hue (0..180) is within ``hue_tolerance``
-    of the colour's, its saturation at least 0.75 of the colour's (shading
+    of the colour's, its saturation at least 0.85 of the colour's (shading
     scales the channels and keeps the ratio; dull browns of the same hue —
-    door frames, debris — stay below) and its value above 60; blobs of fewer
-    than ``min_pixels`` are noise.
+    door frames, debris — stay below even under a camera's white-balance
+    error) and its value above 60; blobs of fewer than ``min_pixels`` are
+    noise.
     """
     hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)
     h0, s0, _ = (int(v) for v in cv2.cvtColor(np.uint8([[colour]]), cv2.COLOR_RGB2HSV)[0, 0])
     hue_off = np.abs(((hsv[..., 0].astype(np.int16) - h0 + 90) % 180) - 90)
-    mask = ((hue_off <= hue_tolerance) & (hsv[..., 1] >= 0.75 * s0) & (hsv[..., 2] > 60)).astype(np.uint8)
+    mask = ((hue_off <= hue_tolerance) & (hsv[..., 1] >= 0.85 * s0) & (hsv[..., 2] > 60)).astype(np.uint8)
     count, labels, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)
     if count <= 1:
         return None

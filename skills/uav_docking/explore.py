@@ -131,8 +131,8 @@ class Explore(Skill):
         """Name of the searched object in the events."""
         target_rgb: tuple[int, int, int] | None = (255, 120, 20)
         """Colour (0-255 RGB) of the searched object: the casualty's high-visibility orange; none: no target search."""
-        target_pixels: int = Field(20, ge=1)
-        """Fewest pixels of that colour that count as a detection (a 0.5 m object at 6 m spans ~25 px at 320 × 240)."""
+        target_pixels: int = Field(40, ge=1)
+        """Fewest pixels of that colour that count as a detection (the 0.5 × 1.7 m casualty at 6 m spans a few hundred at 320 × 240)."""
         target_range: float = Field(6.0, gt=0.0)
         """Farthest distance (m, horizontal, from the floor point under the detection) at which the target counts as found."""
         camera_link: str = "camera_front"
