@@ -206,3 +206,10 @@ def test_without_the_carriers_telemetry_the_uav_hovers_and_waits():
         assert harness.run(explore, 3.0) == Status.RUNNING
         assert explore.feedback_message == "waiting for carrier's telemetry"
         assert np.linalg.norm(uav.pose()[0] - start) < 0.2
+
+
+def test_browns_shifted_by_a_poor_white_balance_are_not_the_target():
+    with World(scene="usar_building", seed=1, noise_scale=4.0) as world:  # four times the sourced colour variation
+        uav = world.add_robot("bebop2", "uav", pose=[-10.0, -3.0, 1.5, math.pi / 2])  # the hall: door frames, debris
+        frame, _, _ = front_camera(world, uav)
+    assert detect_colour(frame.rgb, (255, 120, 20)) is None  # (pixel noise makes specks of a few pixels: not a blob)
