@@ -8,8 +8,10 @@ from skill_harness import Harness
 
 from marsupial.skills.navigation import Footprint, Navigate, PathFollower, local_plan, smooth_path
 from marsupial.trees.replay import read_log
+from marsupial.trees.runner import run_mission
 from marsupial.world import World
 from marsupial.world.contacts import ContactMonitor
+from marsupial.world.priors import BuildingPlan
 
 
 def add_box(world, center, half_extents):
@@ -101,3 +103,28 @@ def test_operator_set_points_replace_the_guide_path(world):
     client.set("/operator/setpoints", [[1.0, 2.5]])
     assert harness.run(navigate, 20.0) == Status.SUCCESS
     assert np.linalg.norm(carrier.footprint_pose()[0][:2] - [1.0, 2.5]) <= 0.3
+
+
+def test_navigate_follows_the_plans_guide_path_through_the_building_on_map_localisation(tmp_path):
+    mission = tmp_path / "m.yaml"
+    mission.write_text(
+        "mission: through_the_building\n"
+        "world: {scene: usar_building, seed: 7}\n"
+        "team:\n"
+        "  carrier: {robot: mobile_manipulator, pose: [-13, -7, 0.73], options: {localization: map},\n"
+        "            sensors: {lidar: {rate_hz: 10, resolution_deg: 1.0}}}\n"
+        "run: {tick_hz: 10, until: 90}\n"
+        "tree: {skill: navigate, robot: carrier, params: {max_speed: 1.0}}\n"
+    )
+    result = run_mission(str(mission), log_path=tmp_path / "run.mcap", progress=False)
+    assert result.outcome == "success", result.message
+    log = read_log(tmp_path / "run.mcap")
+    _, truth = log.poses("carrier")
+    _, estimate = log.poses("carrier", estimate=True)
+    with World(scene="usar_building") as world:
+        plan = BuildingPlan.of(world.scene)
+    end = plan.path("operator_path")[-1]
+    assert np.linalg.norm(truth[-1, :2] - end) < 0.6  # the guide path's end in the target room, through door_6
+    assert np.linalg.norm(truth[:, :2] - estimate[:, :2], axis=1).max() < 0.3  # map localisation: bounded error
+    clearance = min(min(e.distance([x, y, 0.3]) for e in plan.structure) for x, y, _ in truth)
+    assert clearance > 0.19 + 0.2  # the base's half-width (0.19 m) plus room: no wall or jamb grazed
