@@ -96,8 +96,10 @@ def test_sonar_echoes_off_an_obstacle_below_do_not_move_the_height():
             world.step(0.1)
             heights.append((uav.pose()[0][2], uav.estimator.estimate().position[2]))
         true_z, est_z = np.array(heights).T
-        assert np.abs(est_z - true_z).max() < 0.06  # no jump when the echo comes off the platform
-        assert np.abs(true_z - 1.0).max() < 0.08
+        # no jump when the echo comes off the platform (it would be 0.4 m): over it the barometer holds the
+        # height, within a few cm
+        assert np.abs(est_z - true_z).max() < 0.1
+        assert np.abs(true_z - 1.0).max() < 0.1
 
 
 def test_optical_flow_measures_the_velocity_over_the_surface_below():

@@ -69,7 +69,7 @@ class FlightEstimatorGains:
     """
 
     flow_velocity: float = 8.0
-    flow_bias: float = 0.5
+    flow_bias: float = 2.0
     sonar_omega: float = 3.0
     baro_omega: float = 0.7
     baro_calibration_tau: float = 20.0
