@@ -127,10 +127,10 @@ class Explore(Skill):
         """Distance (m) inside D_team at which the UAV is held (room for the carrier's acceleration)."""
         coverage_key: str = "coverage"
         """Blackboard key of the surveyed fraction (0..1), read by ``area_explored``."""
-        target: str = "target"
-        """Name of the searched object in the events."""
-        target_rgb: tuple[int, int, int] | None = (255, 120, 20)
-        """Colour (0-255 RGB) of the searched object: the casualty's high-visibility orange; none: no target search."""
+        target: str | None = "target"
+        """Name of the searched object (in the events); none: no target search."""
+        target_rgb: tuple[int, int, int] = (255, 120, 20)
+        """Colour (0-255 RGB) of the searched object: the casualty's high-visibility orange."""
         target_pixels: int = Field(40, ge=1)
         """Fewest pixels of that colour that count as a detection (the 0.5 × 1.7 m casualty at 6 m spans a few hundred at 320 × 240)."""
         target_range: float = Field(6.0, gt=0.0)
@@ -400,7 +400,7 @@ class Explore(Skill):
         bearings = view_bearings(frame.K, frame.rgb.shape[1], R_nav_optical)
         ranges = plan_ranges(self.map, position[:2], bearings, p.view_range)
         self.seen |= visible_cells(self.map, position[:2], bearings, ranges, p.view_range)
-        if self.found or p.target_rgb is None:
+        if self.found or p.target is None:
             return
         blob = detect_colour(frame.rgb, p.target_rgb, p.target_pixels)
         if blob is None:
