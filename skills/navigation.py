@@ -389,7 +389,7 @@ class Navigate(Skill):
         stuck_timeout: float | None = Field(30.0, gt=0.0)
         """Fail when the progress along the path has not grown by 0.1 m for this long (s); none: never."""
 
-    robot_kinds = ("WheeledRobot",)
+    robot_kinds = ("MobileManipulator",)  # the wheeled robots with a planar LiDAR
     writes = ("{robot}/path_progress",)
 
     @classmethod

@@ -218,6 +218,10 @@ def test_robot_kind_and_robot_presence_are_checked(tmp_path):
     err = compile_error(tmp_path, "until: {skill: wait}\ncondition: {obstacle_ahead: 1.0, robot: ugv}", team=UGV_TEAM)
     assert str(err).endswith("condition 'obstacle_ahead' cannot run on 'ugv' (a summit_xl); "
                              "expected a robot whose kind or class is MobileManipulator")  # no LiDAR
+    err = compile_error(tmp_path, "skill: navigate\nrobot: ugv", team=UGV_TEAM)
+    assert "cannot run on 'ugv' (a summit_xl)" in str(err)  # navigate avoids obstacles with a LiDAR
+    err = compile_error(tmp_path, "skill: explore\nrobot: uav", team="team:\n  uav: {robot: ardrone2}\n")
+    assert str(err).endswith("expected a robot whose kind or class is one of Bebop2, Tello")  # no front camera
     err = compile_error(tmp_path, "skill: wait\nrobot: uav")
     assert "takes no robot" in str(err)
     two = "team:\n  a: {robot: bebop2}\n  b: {robot: tello}\n"

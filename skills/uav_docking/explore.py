@@ -144,7 +144,7 @@ class Explore(Skill):
         stop_at_target: bool = True
         """Succeed when the target is found (else keep exploring)."""
 
-    robot_kinds = ("Quadrotor",)
+    robot_kinds = ("Bebop2", "Tello")  # the quadrotors with a front camera
     writes = ("{coverage_key}", "{target_key}")
 
     # ------------------------------------------------------------ life cycle
