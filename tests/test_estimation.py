@@ -139,6 +139,12 @@ def test_wheel_speed_is_measured_and_the_odometry_frame_is_odom():
         world.step(2.0)
         assert onboard_of(ugv).speed() == pytest.approx(0.8, rel=0.05) and onboard_of(ugv).speed() != ugv.speed()
         assert ugv.estimator.estimate().frame == "odom" and ugv.estimator.estimate().source == "wheel_odometry"
+        ugv.stop()
+        world.step(2.0)
+        parked = ugv.estimator.estimate()
+        world.step(10.0)
+        assert np.array_equal(ugv.estimator.estimate().position, parked.position)  # standing wheels: no drift
+        assert ugv.wheel_speed() == 0.0
 
 
 def test_map_localisation_error_stays_bounded_while_odometry_drifts():

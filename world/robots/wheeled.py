@@ -94,7 +94,9 @@ class WheeledRobot(Robot):
         self.diff_drive = DiffDrive(world, self.body_id, self.limits, f"{name}/drive")
         p0, q0 = self.footprint_pose()  # the start pose the mission declares
         self.odometry = WheelOdometry(self, p0, yaw_of(q0), self.odometry_errors)
-        self.estimator = self.odometry if localization == "odometry" else MapLocalization(self, self.odometry, self.map_errors)
+        self.estimator = (
+            self.odometry if localization == "odometry" else MapLocalization(self, self.odometry, self.map_errors)
+        )
 
     # ------------------------------------------------------------ commands
     def drive(self, v: float, omega: float) -> None:
