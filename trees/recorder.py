@@ -2,20 +2,22 @@
 
 Channels (see ``docs/logs.md`` for every field):
 
-===================  ================================  ==============================================
-topic                schema                            what
-===================  ================================  ==============================================
-``/events``          ``marsupial.Event``               run_start, state_change, preemption, operator,
-                                                       outcome, run_end, error
-``/metrics``         ``marsupial.Metric``              ``{name, value, labels}``
-``/log``             ``foxglove.Log``                  one text line per event, plus free text
-``/tf``              ``foxglove.FrameTransform``       ``world`` -> ``<robot>`` per robot
-``/<robot>/pose``    ``foxglove.PoseInFrame``          robot base pose in ``world``
-``/scene``           ``foxglove.SceneUpdate``          static scene geometry, once at start
-``/<camera>/image``  ``foxglove.CompressedImage``      opt-in camera frames (png/jpeg)
-``/tree``            ``nav2_msgs/msg/BehaviorTreeLog`` tree status changes (``event_log``), on change
-``/tree/xml``        ``std_msgs/msg/String``           the tree as BehaviorTree.CPP XML (``data``)
-===================  ================================  ==============================================
+=======================  =================================  ==============================================
+topic                    schema                             what
+=======================  =================================  ==============================================
+``/events``              ``marsupial.Event``                run_start, state_change, preemption, operator,
+                                                            outcome, run_end, error, unintended_contact
+``/metrics``             ``marsupial.Metric``               ``{name, value, labels}``
+``/log``                 ``foxglove.Log``                   one text line per event, plus free text
+``/tf``                  ``foxglove.FrameTransform``        ``world`` -> ``<robot>`` per robot (true pose)
+``/truth/<robot>/pose``  ``foxglove.PoseInFrame``           robot base pose in ``world`` (simulator truth)
+``/<robot>/pose``        ``foxglove.PoseInFrame``           the robot's onboard estimate (its navigation
+                                                            frame, which starts at ``world``)
+``/scene``               ``foxglove.SceneUpdate``           static scene geometry, once at start
+``/<camera>/image``      ``foxglove.CompressedImage``       opt-in camera frames (png/jpeg)
+``/tree``                ``nav2_msgs/msg/BehaviorTreeLog``  tree status changes (``event_log``), on change
+``/tree/xml``            ``std_msgs/msg/String``            the tree as BehaviorTree.CPP XML (``data``)
+=======================  =================================  ==============================================
 
 The ``/tree`` pair follows what the community's Foxglove behaviour-tree panel
 reads (a ``data`` string of XML on one topic, ``nav2_msgs`` ``event_log``
@@ -51,7 +53,7 @@ import shlex
 import signal
 import sys
 import threading
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING, Any
@@ -435,6 +437,8 @@ class Recorder:
         self.path = Path(path)
         self.record_images = bool(record_images)
         self.t = 0.0  # sim time (s) of the latest message
+        #: the run's clock (sim s); when set, the closing ``run_end`` and ``outcome`` carry the time the run reached
+        self.time_source: Callable[[], float] | None = None
         self._last_ns = 0
         self._schema_ids: dict[str, int] = {}
         self._channel_ids: dict[str, int] = {}
@@ -498,6 +502,8 @@ class Recorder:
         try:
             if outcome is None:
                 outcome = str(self._run_end["outcome"]) if self._run_end else "unknown"
+            if self.time_source is not None:
+                self.t = max(self.t, float(self.time_source()))
             if self._run_end is None:
                 self._write_event(self.t, "run_end", {"outcome": outcome, "sim_time": self.t})
             record = {"outcome": outcome, "sim_time": self.t, **details}
@@ -652,16 +658,31 @@ class Recorder:
         if ns is not None:
             self._write_log(ns, int(level), str(message), name)
 
-    def log_robot_poses(self, t: float, poses: Mapping[str, tuple[Sequence[float], Sequence[float]]]) -> None:
-        """Robot base poses in the world frame: ``{name: (position m, quaternion [x, y, z, w])}``.
+    def log_robot_poses(
+        self,
+        t: float,
+        poses: Mapping[str, tuple[Sequence[float], Sequence[float]]],
+        estimates: Mapping[str, tuple[Sequence[float], Sequence[float]]] | None = None,
+    ) -> None:
+        """True base poses in the world frame and onboard estimates: ``{name: (position m, quaternion [x, y, z, w])}``.
 
         Each robot gets a ``/tf`` transform ``world`` -> ``<name>`` and a
-        ``/<name>/pose`` PoseInFrame.
+        ``/truth/<name>/pose`` PoseInFrame from ``poses`` (simulator truth),
+        and a ``/<name>/pose`` PoseInFrame from ``estimates`` (what the robot
+        believes, in its navigation frame, which starts at ``world``), so any
+        log shows the estimation error.
         """
         ns = self._time(t, "robot poses")
         if ns is None:
             return
         stamp = _stamp(ns)
+        for name, (position, quaternion) in (estimates or {}).items():
+            self._write(
+                f"/{name}/pose",
+                POSE_SCHEMA,
+                ns,
+                {"timestamp": stamp, "frame_id": WORLD_FRAME, "pose": {"position": _xyz(position), "orientation": _xyzw(quaternion)}},
+            )
         for name, (position, quaternion) in poses.items():
             translation, rotation = _xyz(position), _xyzw(quaternion)
             self._write(
@@ -677,7 +698,7 @@ class Recorder:
                 },
             )
             self._write(
-                f"/{name}/pose",
+                f"/truth/{name}/pose",
                 POSE_SCHEMA,
                 ns,
                 {

@@ -56,6 +56,7 @@ from .arm import ArmController
 from .attachment import set_collisions, weld
 from .base import Robot, yaw_of
 from ..estimation.ground import SKID_STEER_ODOMETRY
+from ..onboard import simulates_hardware
 from .diff_drive import DiffDriveLimits
 from .encoders import JointEncoders
 from .wheeled import WheeledRobot
@@ -360,6 +361,7 @@ class MMS(WheeledRobot):
         """Arm joint angles now (rad), ``arm_joint_1`` … ``arm_joint_6``."""
         return self.arm.positions()
 
+    @simulates_hardware
     def arm_encoders(self) -> np.ndarray:
         """Arm joint angles as the joint encoders read them (rad; 12-bit encoders, :mod:`.encoders`)."""
         return self.encoders.read(self.arm.positions())

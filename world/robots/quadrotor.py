@@ -58,7 +58,7 @@ import pybullet
 from ..energy import Battery, BatteryGauge, BatterySpec, RotorPowerModel, hover_endurance_s
 from ..errors import UnknownNameError
 from ..estimation.flight import FlightEstimator
-from ..onboard import QuadrotorOnboard
+from ..onboard import QuadrotorOnboard, simulates_hardware
 from ..sensors.barometer import Barometer
 from ..sensors.base import SensorConfig
 from ..sensors.camera import OPTICAL_DOWN, OPTICAL_FORWARD, Camera, Intrinsics
@@ -382,6 +382,7 @@ class Quadrotor(Robot):
         """Stop (at the reference acceleration) and hold the estimated position where the reference stops."""
         self.autopilot.hover()
 
+    @simulates_hardware
     def set_motors(self, on: bool) -> None:
         """Start or stop the motors. Starting holds the estimated pose; stopped motors give no thrust and draw nothing.
 
