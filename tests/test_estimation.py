@@ -83,6 +83,19 @@ def test_estimate_starts_at_the_spawn_pose_and_holds_with_the_motors_off():
         assert later.position == pytest.approx(estimate.position) and np.allclose(later.velocity, 0.0)
 
 
+def test_a_stored_uav_starts_its_estimate_on_the_dock_and_holds_it_while_carried():
+    with World(seed=0) as world:
+        carrier = world.add_robot("mobile_manipulator", pose=[0.0, 0.0, 0.0])
+        uav = world.add_robot("bebop2", pose=[3.0, 3.0, 0.0])
+        carrier.store(uav)  # set-up: the run starts with the UAV locked on Part A
+        stored = uav.estimator.estimate()
+        assert stored.position == pytest.approx(uav.pose()[0], abs=1e-6)
+        carrier.drive(1.0, 0.0)
+        world.step(3.0)
+        assert uav.docked and uav.pose()[0][0] > stored.position[0] + 2.0  # carried 2+ m
+        assert uav.estimator.estimate().position == pytest.approx(stored.position)  # held until a hand-over
+
+
 def test_sonar_echoes_off_an_obstacle_below_do_not_move_the_height():
     with World(seed=4) as world:
         cid = world.client_id

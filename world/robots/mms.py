@@ -215,6 +215,7 @@ class LaunchingApparatus:
         p_mav = p_seat + np.array([0.0, 0.0, mav.spec.landed_height])  # type: ignore[attr-defined]
         pybullet.resetBasePositionAndOrientation(mav.body_id, p_mav, q_seat, physicsClientId=self.cid)
         pybullet.resetBaseVelocity(mav.body_id, (0, 0, 0), (0, 0, 0), physicsClientId=self.cid)
+        mav.restart_estimate()  # set-up: the MAV starts the run in the cradle
         self.mav = mav
         self.secure_mav()
 

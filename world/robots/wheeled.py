@@ -131,6 +131,10 @@ class WheeledRobot(Robot):
         """World pose of ``base_footprint`` (the base projected on the ground)."""
         return self.link_pose("base_footprint")
 
+    def estimate_frame_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """True pose of ``base_footprint``, the frame the odometry estimates."""
+        return self.footprint_pose()
+
     def state(self) -> dict[str, Any]:
         """Pose plus measured forward speed (m/s), yaw rate (rad/s) and the commanded v, omega."""
         state = super().state()
