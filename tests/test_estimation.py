@@ -236,6 +236,14 @@ def test_ardrone2_bottom_camera_is_0_1_s_late_and_plain_rgb():
         assert uav.sensor("bottom_camera").config.dropout == 0.02  # Wi-Fi video loses frames
 
 
+def test_the_onboard_lidar_scan_carries_no_pose_and_no_body_ids():
+    with World(seed=0) as world:
+        mm = world.add_robot("mobile_manipulator")
+        scan = onboard_of(mm).sensor("lidar").read().data
+        assert not hasattr(scan, "position") and not hasattr(scan, "hit_bodies")
+        assert scan.ranges.shape == scan.angles.shape == (541,) and scan.max_range == 20.0
+
+
 def test_one_seed_is_deterministic_and_two_seeds_differ():
     def flight(seed):
         with World(seed=seed) as world:

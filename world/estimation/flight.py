@@ -51,6 +51,9 @@ if TYPE_CHECKING:
     from ..world import World
 
 
+REST_DECIMATION = 4  # at rest the filter runs every 4th autopilot update (30 Hz)
+
+
 @dataclass(frozen=True)
 class FlightEstimatorGains:
     """Gains of the complementary filter (chosen; see ``docs/world.md``).
@@ -132,6 +135,7 @@ class FlightEstimator(Estimator):
         self._baro_offset: float | None = None  # m, navigation z minus barometer reading
         self._baro_n = 0  # samples in the offset's running mean
         self._cache: StateEstimate | None = None
+        self._rest_calls = -1
         _, self._w, self._q_imu = self.imu.sample()
         self.reset(np.asarray(position, dtype=float), float(yaw))
         self.resets = 0  # the start pose is not a hand-over
@@ -159,7 +163,18 @@ class FlightEstimator(Estimator):
         return self._cache
 
     def update(self, dt: float, at_rest: bool = False) -> None:
-        """One filter step of ``dt`` s: IMU propagation, then the flow, sonar and barometer samples that are new."""
+        """One filter step of ``dt`` s: IMU propagation, then the flow, sonar and barometer samples that are new.
+
+        At rest (motors off or docked) only every ``REST_DECIMATION``-th call does anything: the
+        velocity is zero, the position held, and the attitude (a carried vehicle turns with its
+        carrier) and the barometer offset follow at a quarter of the rate.
+        """
+        if at_rest:
+            self._rest_calls += 1
+            if self._rest_calls % REST_DECIMATION:
+                return
+        else:
+            self._rest_calls = -1  # the first call at rest runs
         self._cache = None
         self._stamp = self.clock.now
         f, self._w, q_imu = self.imu.sample()
