@@ -1,4 +1,4 @@
-"""pydantic validation errors turned into located :class:`~marsupial.trees.errors.MissionError`\ s.
+"""pydantic validation errors turned into located :class:`~marsupial.trees.errors.MissionError` errors.
 
 Each error names the YAML key path (union tags dropped), its file:line:column,
 what was expected and, for unknown keys, the closest known key.
