@@ -65,7 +65,6 @@ from .prediction import KalmanParams
 
 if TYPE_CHECKING:
     from marsupial.trees.skill import MissionNode, RunContext
-    from marsupial.world.estimation import StateEstimate
 
 #: gain schedules ``K = Q·exp(-T·p_z)`` selectable by name (see :mod:`.control`)
 GAIN_SCHEDULES: dict[str, PIGains] = {
@@ -227,10 +226,10 @@ class TrackingModule:
         self.located = 0  # frames that located the platform
         self._located_at_takeoff = 0
         self.height = math.inf  # newest sonar range (m)
-        self.estimate: StateEstimate | None = None  # newest onboard estimate
+        self.estimate: Any = None  # newest onboard StateEstimate (navigation frame), None before the first update
         self.imu_samples: list[tuple[float, np.ndarray]] = []  # (stamp s, specific force m/s²) since the last tick
         self._imu_stamp = -math.inf
-        self._estimates: StampedHistory[StateEstimate] = StampedHistory()
+        self._estimates: StampedHistory[Any] = StampedHistory()  # StateEstimates by stamp
         self._heights: StampedHistory[float] = StampedHistory()
         self._updated_at = -math.inf
         self._requested_at = -math.inf  # last time the camera was read (s)
