@@ -6,6 +6,7 @@ from pydantic import ValidationError
 
 from marsupial.geometry import heading_rotation, yaw_of
 from marsupial.skills.landing.skills import DrivePattern, FlightParams, Land
+from marsupial.trees.mission import parse_mission
 from marsupial.trees.replay import read_log
 from marsupial.trees.runner import run_mission
 
@@ -84,10 +85,26 @@ def test_at_10_hz_with_gusts_the_uav_lands_on_the_moving_platform(tmp_path):
     _assert_rides_the_platform(log)
 
 
+# the UGV never drives: its platform is as still as the ground (a driven Summit XL shakes its rider even at 1 mm/s)
+STILL_PLATFORM = """
+mission: still_platform
+world: {scene: open_field, seed: 0}
+team:
+  ugv: {robot: summit_xl, pose: [0, 0, 0]}
+  uav: {robot: ardrone2, pose: [0, 0, 0.466, 0], options: {motors_on: false}}
+run: {tick_hz: 30, until: 60}
+tree:
+  subtree: landing_cycle
+  params: {uav: uav, platform: ugv, land_after: 0.5, land_after_since: tracking, nominal_height: 2.0}
+"""
+
+
 @pytest.mark.parametrize("tick_hz", [10, 30])
 def test_a_still_platform_feels_like_the_ground_and_the_landing_fails(tmp_path, tick_hz):
     # the landed test needs the IMU to feel the moving platform (§3.3.1): on a still one it reports the ground
-    result, log = _run(tmp_path, "landing_linear", v=0.001, nominal_height=2.0, track_seconds=0.5, **{"run.tick_hz": tick_hz})
+    mission = parse_mission(STILL_PLATFORM, "still_platform.yaml", {"run.tick_hz": str(tick_hz)})
+    result = run_mission(mission, log_path=tmp_path / "run.mcap", progress=False)
+    log = read_log(tmp_path / "run.mcap")
     assert result.outcome == "failure"
     outcome = next(e for e in log.events if e["kind"] == "outcome" and e["skill"] == "land")
     assert outcome["status"] == "FAILURE" and "landed on the ground" in outcome["message"]

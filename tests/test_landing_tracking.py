@@ -62,22 +62,29 @@ def test_frames_are_posed_with_the_estimate_and_the_urdf_mount_not_the_true_came
         assert module.offset == pytest.approx(expected, abs=0.05)
 
 
-def _vibration(t: np.ndarray, rng: np.random.Generator, rms: float) -> np.ndarray:
-    """A rider's horizontal specific force (m/s², body x-y) on a shaking platform: 11–29 Hz surge plus noise."""
-    fx = rms * (np.sin(2 * math.pi * 11.0 * t) + 0.8 * np.sin(2 * math.pi * 29.2 * t + 1.0)) / 0.9
-    noise = rng.normal(0.0, 0.05, (len(t), 3))
-    return np.c_[fx, np.zeros_like(t), np.full_like(t, 9.81)] + noise
+def _vibration(t: np.ndarray, rng: np.random.Generator, rms: float, touchdown: float) -> np.ndarray:
+    """A rider's specific force (m/s², body frame): descending until ``touchdown`` (s), an impact, then riding a
+    platform that shakes it along x at 11–29 Hz with ``rms`` (0: the ground), plus noise and a constant bias."""
+    riding = t >= touchdown
+    fx = np.where(riding, rms * (np.sin(2 * math.pi * 11.0 * t) + 0.8 * np.sin(2 * math.pi * 29.2 * t + 1.0)) / 0.9, 0.0)
+    fz = np.full_like(t, 9.81)
+    impact = (t >= touchdown) & (t < touchdown + 0.01)
+    fz[impact] = 150.0
+    fx[impact] = 1.7  # the touchdown rocks the vehicle, whatever it lands on
+    bias = np.array([0.05, -0.07, 0.0])
+    return np.c_[fx, np.zeros_like(t), fz] + bias + rng.normal(0.0, 0.05, (len(t), 3))
 
 
-def _verdict(tick_hz: float, rms: float, seed: int = 0) -> tuple[str, float, int]:
+def _verdict(tick_hz: float, rms: float, seed: int = 0, touchdown: float = 0.27) -> tuple[str, float, int]:
     """Drive a :class:`TouchdownTest` with the sonar low from t = 0 and the IMU at its rate; ticks at ``tick_hz``."""
     rng = np.random.default_rng(seed)
     stamps = np.arange(0.0, 3.0, 1.0 / IMU_HZ)
-    forces = _vibration(stamps, rng, rms)
+    forces = _vibration(stamps, rng, rms, touchdown)
     test, k = TouchdownTest(), 0
     for tick in np.arange(0.0, 3.0, 1.0 / tick_hz):
-        new = [(float(s), f) for s, f in zip(stamps, forces) if k <= int(round(s * IMU_HZ)) and s <= tick + 1e-9]
-        k += len(new)
+        n = int(np.searchsorted(stamps, tick + 1e-9, side="right"))
+        new = [(float(s), f) for s, f in zip(stamps[k:n], forces[k:n])]
+        k = n
         verdict = test.update(float(tick), 0.2, new)
         if verdict is not None:
             return verdict, float(tick), test.samples
@@ -86,13 +93,15 @@ def _verdict(tick_hz: float, rms: float, seed: int = 0) -> tuple[str, float, int
 
 @pytest.mark.parametrize("tick_hz", [10.0, 30.0, 60.0])
 def test_touchdown_verdict_is_the_same_at_every_tick_rate(tick_hz):
-    # riding the platform (vibration RMS 0.35 m/s²) and resting on the ground (noise only)
+    # riding the platform (vibration RMS 0.35 m/s²) and resting on the ground (noise and bias only)
+    p = TouchdownParams()
+    ready = 0.27 + p.settle_s + p.evidence_s  # touchdown, settling, evidence
     for seed in range(5):
         verdict, t, samples = _verdict(tick_hz, 0.35, seed)
         assert verdict == "platform"
-        assert TouchdownParams().hold_s <= t < TouchdownParams().hold_s + 1.0 / tick_hz + 1e-9  # first tick after the window
-        assert samples >= 0.3 * IMU_HZ  # every IMU sample of the window, not one per tick
-        assert _verdict(tick_hz, 0.0, seed)[0] == "ground"
+        assert ready <= t < ready + 1.0 / tick_hz + 1e-9  # the first tick with the evidence complete
+        assert samples >= p.evidence_s * IMU_HZ  # every IMU sample of the evidence, not one per tick
+        assert _verdict(tick_hz, 0.0, seed)[0] == "ground"  # the impact's rocking is not taken for motion
 
 
 def test_touchdown_waits_for_a_persistent_low_sonar():
@@ -101,8 +110,9 @@ def test_touchdown_waits_for_a_persistent_low_sonar():
     assert test.update(0.0, 0.25, [(0.0, force)]) is None
     assert test.update(0.2, 0.4, [(0.2, force)]) is None  # the sonar rose: the window restarts
     assert test.since is None and test.samples == 0
-    samples = [(0.3 + k / IMU_HZ, force) for k in range(61)]
+    samples = [(0.3 + k / IMU_HZ, force * [1 - 2 * (k % 2), 1, 1]) for k in range(81)]  # ±0.5 m/s² along x
     assert test.update(0.3, 0.25, samples[:1]) is None
-    assert test.update(0.6, 0.25, samples[1:]) == "platform" and test.ride_rms == pytest.approx(0.5)
+    assert test.update(0.6, 0.25, samples[1:61]) is None  # held long enough, but no impact: evidence from 0.4 s on
+    assert test.update(0.7, 0.25, samples[61:]) == "platform" and test.ride_rms == pytest.approx(0.5, abs=0.01)
     with pytest.raises(ValueError, match="min_samples"):
         TouchdownParams(min_samples=0)
