@@ -25,7 +25,10 @@ with the estimate and the sonar range nearest its stamp, i.e. the camera's
 pose when it was taken, ``T_nav_cam = T_nav_base(estimate) T_base_link
 (URDF) T_link_optical``. A located platform (``P_nav = T_nav_cam P_cam``,
 §3.3.2: the centroid's ray met with the platform's plane, exact for a
-tilted camera too) feeds the tracker. World-frame quantities of the paper
+tilted camera too) feeds the tracker. The loss clock counts from the
+arrival of the last position, "more than 0.5 s without getting a new
+position" (§3.1), not from its capture: a late video is not a lost
+platform. World-frame quantities of the paper
 are in the estimate's navigation frame: the estimate drifts, but platform
 and UAV positions are both taken in it, so the drift cancels in their
 difference. Frames are discarded beyond a tilt of 25° (the authors' node:
@@ -217,11 +220,11 @@ class TrackingModule:
         self.state = "landed"
         self.flight_start: float | None = None
         self.tracking_start: float | None = None
-        self.last_seen: float | None = None  # loss clock (s)
+        self.last_seen: float | None = None  # loss clock (s): when the last position arrived
         self.pending_relocalization: str | None = None  # why, while a re-localisation is due
         self.relocalizations = 0
         self.offset: np.ndarray | None = None  # last located platform - UAV, heading frame (m), from onboard data
-        self.offset_at = -math.inf  # its time (s)
+        self.offset_at = -math.inf  # when it arrived (s)
         self.offset_height = math.inf  # sonar height when it was measured (m)
         self.located = 0  # frames that located the platform
         self._located_at_takeoff = 0
@@ -305,7 +308,7 @@ class TrackingModule:
         detection = detect_platform(frame.rgb, frame.K, pose.height, pose.tilt, self.detection_params)
         if detection is None:
             if pose.tilt <= self.detection_params.max_tilt and self._fills_view(frame.rgb):
-                self.last_seen = stamp  # right below the camera, not located
+                self.last_seen = self.now  # right below the camera, not located
                 if self.tracker is not None and self.tracker.mode == "reactive":
                     # the reactive controller has only its latest measurement: an all-red view puts the
                     # platform's centroid at the image centre (the paper's centroid of the visible part)
@@ -315,8 +318,8 @@ class TrackingModule:
         if self.tracker is not None:
             self.tracker.observe(stamp, p_nav)
         self.offset = heading_rotation(pose.yaw) @ (p_nav[:2] - pose.uav_position[:2])
-        self.offset_at, self.offset_height = stamp, self._heights.nearest(stamp)
-        self.last_seen = stamp
+        self.offset_at, self.offset_height = self.now, self._heights.nearest(stamp)
+        self.last_seen = self.now
         self.located += 1
 
     def _fills_view(self, rgb: np.ndarray) -> bool:
