@@ -62,7 +62,7 @@ def test_an_occluded_platform_triggers_relocalize_and_the_cycle_completes(tmp_pa
     relocalizing = [(t, why) for t, s, why in states if s == "relocalizing"]
     assert len(relocalizing) == 1
     t_lost, why = relocalizing[0]
-    # 0.5 s after the last frame before the occlusion (the predictive controller reads one per 0.1 s), §3.1
+    # 0.5 s after the last frame before the occlusion arrived (the predictive controller reads one per 0.1 s), §3.1
     assert 6.4 <= t_lost <= 6.7 and why.startswith("platform unseen for")
     preemptions = [e for e in log.events if e["kind"] == "preemption"]
     assert preemptions and preemptions[0]["by"] == "re-localizing"
