@@ -97,7 +97,10 @@ class NodeBase(BaseModel):
     model_config = ConfigDict(extra="forbid")
     kind: ClassVar[str]
 
-    name: str | None = Field(None, description="Display name of the node (in logs, tree drawings).")
+    name: str | None = Field(
+        None, min_length=1, max_length=200, pattern=r"^[^\x00-\x1f\x7f]+$",
+        description="Display name of the node (in logs, tree drawings): printable text, no control characters.",
+    )
     _key_path: KeyPath = PrivateAttr(default_factory=KeyPath)
 
     @property
@@ -419,9 +422,9 @@ class SensingSpec(BaseModel):
 class WorldSpec(BaseModel):
     """The world to run in: scene name, seed of every noise source, sensing, disturbances."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
     scene: str | None = Field(None, description="Scene name (world/scenes/<name>.yaml); none: an empty floor.")
-    seed: int = Field(0, description="Seed of all randomness in the world.")
+    seed: int = Field(0, ge=0, le=2**63 - 1, description="Seed of all randomness in the world (an integer >= 0).")
     sensing: SensingSpec = Field(default_factory=SensingSpec)
     disturbances: dict[str, Any] = Field(default_factory=dict, description="Disturbances (wind, sensor faults …).")
 
@@ -429,7 +432,7 @@ class WorldSpec(BaseModel):
 class TeamMember(BaseModel):
     """A robot of the team: its kind, start pose and options."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
     robot: str = Field(description="Robot kind (see world/robots ROBOT_KINDS).")
     pose: list[float] | None = Field(None, description="Start pose [x, y], [x, y, yaw] (ground robots) or [x, y, z, yaw] (m, rad, world frame).")
     stored_on: str | None = Field(None, description="Team member that carries this robot at the start.")
@@ -440,7 +443,7 @@ class TeamMember(BaseModel):
 class OperatorEvent(BaseModel):
     """A scripted operator command at a simulated time."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
     at: float = Field(ge=0, description="Simulated time of the command (s).")
     say: str = Field(min_length=1, description="Command: abort, pause, resume or a mission-defined word (dock …).")
     why: str = Field("", description="Reason, recorded with the command.")
@@ -449,8 +452,11 @@ class OperatorEvent(BaseModel):
 class RunSpec(BaseModel):
     """How the tree is ticked: tick rate and time limit (simulated)."""
 
-    model_config = ConfigDict(extra="forbid")
-    tick_hz: float = Field(10.0, gt=0, description="Tree tick rate (Hz, simulated time).")
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
+    tick_hz: float = Field(
+        10.0, ge=0.01, le=240.0,
+        description="Tree tick rate (Hz, simulated time): at most the physics rate (240 Hz), at least one tick per 100 s.",
+    )
     until: float | None = Field(None, gt=0, description="Stop the run at this simulated time (s); none: no limit.")
 
 
@@ -503,6 +509,8 @@ _EXPECTATIONS = {
     "less_than": "a value < {lt}", "less_than_equal": "a value <= {le}",
     "too_short": "at least {min_length} item(s)", "too_long": "at most {max_length} item(s)",
     "string_too_short": "a non-empty string", "none_required": "null",
+    "finite_number": "a finite number", "string_pattern_mismatch": "printable text (no control characters)",
+    "string_too_long": "at most {max_length} characters", "tuple_type": "a list", "float_from_bool": "a number",
 }
 
 
@@ -729,6 +737,8 @@ class Mission:
     source: SourceDoc
     overrides: dict[str, str] = field(default_factory=dict)
     references: dict[tuple, str] = field(default_factory=dict, repr=False)  # (file, include note, key path) -> note
+    #: texts of the subtree files inlined, by their path relative to the mission's folder (see :func:`subtree_key`)
+    subtree_texts: dict[str, str] = field(default_factory=dict, repr=False)
 
     @property
     def name(self) -> str:

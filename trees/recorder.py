@@ -53,7 +53,7 @@ import shlex
 import signal
 import sys
 import threading
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING, Any
@@ -437,6 +437,8 @@ class Recorder:
         self.path = Path(path)
         self.record_images = bool(record_images)
         self.t = 0.0  # sim time (s) of the latest message
+        #: the run's clock (sim s); when set, the closing ``run_end`` and ``outcome`` carry the time the run reached
+        self.time_source: Callable[[], float] | None = None
         self._last_ns = 0
         self._schema_ids: dict[str, int] = {}
         self._channel_ids: dict[str, int] = {}
@@ -500,6 +502,8 @@ class Recorder:
         try:
             if outcome is None:
                 outcome = str(self._run_end["outcome"]) if self._run_end else "unknown"
+            if self.time_source is not None:
+                self.t = max(self.t, float(self.time_source()))
             if self._run_end is None:
                 self._write_event(self.t, "run_end", {"outcome": outcome, "sim_time": self.t})
             record = {"outcome": outcome, "sim_time": self.t, **details}
