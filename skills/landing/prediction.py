@@ -122,6 +122,16 @@ class PlatformPredictor:
         self.filter.reset(position_world, velocity_world)
         self.stamp = t
 
+    def shift_velocity(self, delta_world: np.ndarray) -> None:
+        """Add ``delta_world`` (m/s, world frame) to the estimated velocity: the frame's own velocity changed.
+
+        E.g. the UAV's navigation frame starts moving with the platform once
+        its optical flow sees the platform (:mod:`.flowframe`); positions are
+        kept. No effect before the first measurement.
+        """
+        if self.stamp is not None:
+            self.filter.x[2:] += np.asarray(delta_world, dtype=float)[:2]
+
     def observe(self, t: float, position_world: np.ndarray) -> bool:
         """Offer the platform position measured at ``t`` (world frame, m); True if it was fused.
 

@@ -64,6 +64,7 @@ from marsupial.world.onboard import PlatformOnboard
 
 from .control import PIGains, PlatformTracker
 from .detection import DetectionParams, detect_platform, tilt_of
+from .flowframe import FrameShift, flow_surface
 from .prediction import KalmanParams
 
 if TYPE_CHECKING:
@@ -200,6 +201,7 @@ class TrackingModule:
         self.camera = uav.sensor("bottom_camera")
         self.sonar = uav.sensor("sonar")
         self.imu = uav.sensor("imu")
+        self.flow_half_angle = float(uav.sensor("flow").half_angle)  # static fact of the flow field (rad)
         # the camera's mount in the base frame, from the URDF: T_base_optical = T_base_link T_link_optical
         p_link, R_link = uav.link_offset("camera_bottom")
         self._p_base_camera = np.asarray(p_link) + np.asarray(R_link) @ np.asarray(self.camera.offset)
@@ -207,6 +209,7 @@ class TrackingModule:
         self._p_base_sonar = np.asarray(self.sonar.offset, dtype=float)
         self._max_speed = float(uav.limits.max_speed_xy)
         side = float(platform_size[0])
+        self._half_side = 0.5 * min(float(platform_size[0]), float(platform_size[1]))
         # frames are used while the sonar's first echo gives the height within 1.5 % (cone half-angle + 10°)
         max_tilt = float(self.sonar.half_angle) + math.radians(TILT_BEYOND_CONE_DEG)
         self.detection_params = DetectionParams(platform_side_m=side, max_tilt=max_tilt)
@@ -227,6 +230,9 @@ class TrackingModule:
         self.offset_at = -math.inf  # when it arrived (s)
         self.offset_height = math.inf  # sonar height when it was measured (m)
         self.located = 0  # frames that located the platform
+        self.platform_yaw: float | None = None  # platform heading from the last located frame (rad, modulo π/2)
+        self.frame_shift = FrameShift()  # the estimate frame's velocity change when the flow changes surfaces
+        self._flow_on_platform_since: float | None = None  # since when the flow is predicted on the platform (s)
         self._located_at_takeoff = 0
         self.height = math.inf  # newest sonar range (m)
         self.estimate: Any = None  # newest onboard StateEstimate (navigation frame), None before the first update
@@ -259,6 +265,7 @@ class TrackingModule:
         self.imu_samples = [(r.stamp, r.data.linear_acceleration) for r in self.imu.read_since(self._imu_stamp)]
         if self.imu_samples:
             self._imu_stamp = self.imu_samples[-1][0]
+        self._follow_flow_frame()
         if self._frame_wanted(now):
             self._requested_at = now
             reading = self.camera.read()
@@ -267,6 +274,44 @@ class TrackingModule:
                 self._look(reading.stamp, reading.data)
         if self.state in FLYING and self.last_seen is None and self.height >= self.acquire_height:
             self.last_seen = now
+
+    def _follow_flow_frame(self) -> None:
+        """Carry the estimate frame's velocity change into the filter while the flow changes surfaces (our departure).
+
+        See :mod:`.flowframe`: near the height where the flow's median ray
+        switches between floor and platform (predicted from the filter's
+        platform, the platform's heading from the detections, the sonar
+        height and the flow field's half-angle), the part of the estimated
+        velocity's change that the flow made is added to the platform's
+        velocity in the filter; once the flow has been predicted on the
+        platform for the estimator's transition time, the platform is still
+        in the frame and the filter's velocity is held at zero. With the velocity feed-forward only (the paper's controller has
+        neither).
+        """
+        estimate, tracker = self.estimate, self.tracker
+        R = rotation_matrix(estimate.orientation)
+        on_platform = switching = False
+        if tracker is not None and self.state in FLYING and math.isfinite(self.height):
+            predictor = tracker.predictor
+            if predictor.stamp is not None:
+                platform_xy = predictor.filter.position + predictor.filter.velocity * (self.now - predictor.stamp)
+                origin = np.asarray(estimate.position, dtype=float) + R @ self._p_base_sonar  # flow: the sonar's origin
+                yaw = yaw_of(estimate.orientation) if self.platform_yaw is None else self.platform_yaw
+                on_platform, switching = flow_surface(
+                    self.flow_half_angle, R, origin[:2], self.height, platform_xy, yaw, self._half_side
+                )
+        shift = self.frame_shift.step(estimate.stamp, estimate.velocity[:2], R, self.imu_samples, switching)
+        if not on_platform:
+            self._flow_on_platform_since = None
+        elif self._flow_on_platform_since is None:
+            self._flow_on_platform_since = estimate.stamp
+        if tracker is None or not tracker.velocity_feedforward:
+            return
+        since = self._flow_on_platform_since
+        if since is not None and estimate.stamp - since >= self.frame_shift.settle_s:
+            tracker.predictor.shift_velocity(-tracker.predictor.filter.velocity)  # the frame rides the platform
+        elif shift[0] or shift[1]:
+            tracker.predictor.shift_velocity(shift)
 
     def _frame_wanted(self, now: float) -> bool:
         """Whether to read the camera now (a read makes the camera take a frame, delivered after its latency).
@@ -319,8 +364,16 @@ class TrackingModule:
             self.tracker.observe(stamp, p_nav)
         self.offset = heading_rotation(pose.yaw) @ (p_nav[:2] - pose.uav_position[:2])
         self.offset_at, self.offset_height = self.now, self._heights.nearest(stamp)
+        self.platform_yaw = self._heading_of(detection.polygon, frame.K, pose.rotation)
         self.last_seen = self.now
         self.located += 1
+
+    @staticmethod
+    def _heading_of(polygon: np.ndarray, K: np.ndarray, R_nav_optical: np.ndarray) -> float:
+        """Heading (rad, navigation frame, modulo π/2) of a square platform's sides in a frame."""
+        angle = math.radians(cv2.minAreaRect(np.asarray(polygon, dtype=np.float32))[2])
+        side = R_nav_optical @ np.array([math.cos(angle) / K[0, 0], math.sin(angle) / K[1, 1], 0.0])
+        return math.atan2(float(side[1]), float(side[0])) % (math.pi / 2)
 
     def _fills_view(self, rgb: np.ndarray) -> bool:
         """Whether the platform's red covers most of the frame (the platform is right below)."""
@@ -375,10 +428,13 @@ class TrackingModule:
     def relocalization_due(self, unseen_s: float, max_error: float, final_height: float) -> str | None:
         """Why a re-localisation is due (§3.1, recovery module), ``None`` if it is not; latched once due.
 
-        Due when the platform has been unseen for more than ``unseen_s``, or a
-        location taken below ``final_height`` (sonar) puts it more than
-        ``max_error`` away horizontally. It stays due until
-        :meth:`end_relocalization`.
+        Due when the platform has been unseen for more than ``unseen_s``, or,
+        below ``final_height`` (sonar), the latest location (arrived within
+        ``unseen_s``) puts it more than ``max_error`` away horizontally. The
+        test is on the UAV's height now, not only the height the location was
+        taken at: the 1 m platform fills the view below ≈0.72 m, so the last
+        location comes from just above 0.7 m and the paper's abort would
+        otherwise never fire.
         """
         if self.state not in FLYING:
             return None
@@ -388,7 +444,7 @@ class TrackingModule:
                 self.pending_relocalization = f"platform unseen for {now - self.last_seen:.2f} s"
             elif (
                 self.offset is not None
-                and self.offset_height < final_height
+                and min(self.height, self.offset_height) < final_height
                 and now - self.offset_at <= unseen_s
                 and float(np.hypot(*self.offset)) > max_error
             ):
