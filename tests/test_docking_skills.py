@@ -16,7 +16,9 @@ from skill_harness import Harness
 
 from marsupial.skills.uav_docking.contact import K_C, Contact, contact_height
 from marsupial.skills.uav_docking.rendezvous import Rendezvous
-from marsupial.skills.uav_docking.track import PoseFusion, Track, TrackingState, sonar_cone_zones
+from marsupial.skills.uav_docking.relative_pose import RelativePoseFilter
+from marsupial.skills.uav_docking.selection import rot_z
+from marsupial.skills.uav_docking.track import Track, TrackingState, sonar_cone_zones
 from marsupial.skills.uav_docking.zones import ZoneMap
 from marsupial.trees.operator import OperatorChannel
 from marsupial.trees.replay import read_log
@@ -172,23 +174,42 @@ def test_the_sonar_cone_is_a_prohibited_zone_around_the_beam_only():
     assert zones.points_free(outside).all()
 
 
-def test_pose_fusion_rejects_outliers_and_carries_the_estimate_with_odometry():
-    fusion = PoseFusion(gain=0.5, gate=0.03, max_rejections=3)
-    T_odo = np.eye(4)
-    assert fusion.estimate(T_odo) is None
-    T_meas = np.eye(4)
-    T_meas[:3, 3] = [0.01, 0.0, 0.0]  # the camera sees the UAV 1 cm off the odometry
-    assert fusion.measure(T_meas, T_odo)
-    T_odo_later = np.eye(4)
-    T_odo_later[:3, 3] = [0.0, 0.2, 0.0]  # the UAV moved 0.2 m (odometry) while the marker was hidden
-    np.testing.assert_allclose(fusion.estimate(T_odo_later)[:3, 3], [0.01, 0.2, 0.0], atol=1e-12)
-    wrong = np.eye(4)
-    wrong[:3, 3] = [0.11, 0.2, 0.0]  # 10 cm off: a wrong pose branch at the image border
-    assert not fusion.measure(wrong, T_odo_later)
-    np.testing.assert_allclose(fusion.estimate(T_odo_later)[:3, 3], [0.01, 0.2, 0.0], atol=1e-12)
-    for _ in range(3):  # the same offset again and again: the estimate itself was wrong, restart
-        fusion.measure(wrong, T_odo_later)
-    assert fusion.measure(wrong, T_odo_later)
-    np.testing.assert_allclose(fusion.estimate(T_odo_later)[:3, 3], [0.11, 0.2, 0.0], atol=1e-12)
+def _pose(x, y, z=0.0, yaw=0.0):
+    T = np.eye(4)
+    T[:3, :3] = rot_z(yaw)
+    T[:3, 3] = [x, y, z]
+    return T
+
+
+def test_relative_pose_filter_carries_the_frame_drift_and_rejects_outliers():
+    f = RelativePoseFilter(gain=0.5, gate=0.03, max_rejections=3)
+    T_N_M = _pose(2.0, 1.0, 0.5, yaw=math.pi / 2)  # the carrier's M in its navigation frame
+    T_O_Q = _pose(2.0, 2.0, 1.5)  # the UAV in its odometry frame
+    # before any frame: both start frames are the mission's world frame
+    np.testing.assert_allclose(f.predict(T_N_M, T_O_Q)[:3, 3], [1.0, 0.0, 1.0], atol=1e-12)
+    # the camera sees the UAV 5 cm and 0.1 rad off what the estimates say: the first frame anchors C exactly
+    measured = _pose(1.05, 0.0, 1.0, yaw=-math.pi / 2 + 0.1)
+    assert f.measure(measured, T_N_M, T_O_Q)
+    np.testing.assert_allclose(f.predict(T_N_M, T_O_Q), measured, atol=1e-12)
+    # the carrier turns and drives on, the UAV flies 0.3 m (both by their estimates): the drift is carried along
+    T_N_M_later = _pose(2.5, 1.0, 0.5, yaw=math.pi / 2 + 0.2)
+    T_O_Q_later = _pose(2.3, 2.0, 1.5)
+    C = f.C.copy()
+    expected = np.linalg.inv(T_N_M_later) @ C @ T_O_Q_later
+    np.testing.assert_allclose(f.predict(T_N_M_later, T_O_Q_later), expected, atol=1e-12)
+    # a measurement 10 cm off the prediction is an outlier and leaves the estimate alone ...
+    wrong = expected.copy()
+    wrong[:3, 3] += [0.1, 0.0, 0.0]
+    assert not f.measure(wrong, T_N_M_later, T_O_Q_later)
+    np.testing.assert_allclose(f.C, C, atol=1e-12)
+    # ... a close one moves it by the gain
+    close = expected.copy()
+    close[:3, 3] += [0.02, 0.0, 0.0]
+    assert f.measure(close, T_N_M_later, T_O_Q_later)
+    np.testing.assert_allclose(f.predict(T_N_M_later, T_O_Q_later)[:3, 3], expected[:3, 3] + [0.01, 0.0, 0.0], atol=1e-12)
+    for _ in range(3):  # the same far pose again and again: the prediction itself was wrong, restart on it
+        assert not f.measure(wrong, T_N_M_later, T_O_Q_later)
+    assert f.measure(wrong, T_N_M_later, T_O_Q_later)
+    np.testing.assert_allclose(f.predict(T_N_M_later, T_O_Q_later)[:3, 3], wrong[:3, 3], atol=1e-12)
     with pytest.raises(ValueError, match="gain"):
-        PoseFusion(gain=0.0)
+        RelativePoseFilter(gain=0.0)

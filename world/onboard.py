@@ -200,6 +200,11 @@ class QuadrotorOnboard(BatteryOnboard):
         return bool(self._robot.docked)  # type: ignore[attr-defined]
 
     @property
+    def thrust(self) -> float:
+        """Total rotor thrust (N) the flight controller commands (motor speeds through its rotor model); 0 with the motors off."""
+        return float(self._robot.thrust) if self.motors_on else 0.0  # type: ignore[attr-defined]
+
+    @property
     def limits(self) -> Any:
         """The kind's :class:`~marsupial.world.robots.quadrotor.FlightLimits` (datasheet)."""
         return self._robot.limits  # type: ignore[attr-defined]
@@ -261,7 +266,8 @@ class DockingPort:
     Commands: :meth:`magnet_on`, :meth:`magnet_off`, :meth:`lock`,
     :meth:`release`. Device states: :attr:`magnet` (coil energised),
     :attr:`contact_switch` (Part B seated in the cone: the limit switch
-    under Part A's face), :attr:`locked` (lever end switch), :attr:`locking`.
+    under Part A's face), :attr:`locked` (lever end switch), :attr:`locking`,
+    :attr:`charging` (the charger's current sense).
     """
 
     __slots__ = ("_DockingPort__device",)
@@ -304,6 +310,12 @@ class DockingPort:
     def locking(self) -> bool:
         """True while the levers are closing."""
         return bool(self.__device.locking)
+
+    @property
+    def charging(self) -> bool:
+        """True while the charger delivers current to a locked UAV (the charger's current sense, §V-A)."""
+        uav = self.__device.docked
+        return bool(uav is not None and getattr(uav, "charging", False))
 
     @property
     def state(self) -> str:

@@ -1,0 +1,219 @@
+"""The UAV pose in the manipulator frame M between camera frames: the two robots' own estimates, re-anchored by each frame.
+
+The eye-in-hand camera measures P_Q^M (eq. 1) at its frame rate, late by
+its latency, and not at all when the bundle is out of view. Between frames
+the pose is propagated with what the two robots know of their own motion:
+
+- the carrier's onboard estimate (wheel odometry or map localisation) of its
+  base in its navigation frame N, composed with M's mount in the URDF:
+  ``T_N_M(t)``;
+- the UAV's onboard estimate (IMU, optical flow, sonar, barometer) of its
+  base in its odometry frame O, as the carrier receives it over the team
+  link (20 Hz telemetry, late and sometimes lost): ``T_O_Q(t)``, extrapolated
+  from the newest message with its velocity and yaw rate.
+
+N and O coincide at the start of a run and part by the estimators' drift,
+so the pose in M is ``T_M_Q(t) = T_N_M(t)⁻¹ · C · T_O_Q(t)`` with ``C`` the
+drift between the two frames (a turn about z and a translation), which each
+camera frame re-anchors (:class:`RelativePoseFilter`): the prediction at
+the frame's stamp is compared with the measurement and ``C`` moves toward
+it by a gain; a measurement too far from the prediction is an outlier. Only
+the drift since the last frame adds to the error while the marker is hidden.
+
+Frames and units: 4×4 homogeneous transforms ``T_A_B`` (B in A), metres,
+radians, seconds (simulated).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from marsupial.geometry import rot_z, rotation_matrix, transform
+from marsupial.world.estimation import StateEstimate
+
+from .selection import yaw_of_rotation
+
+ESTIMATE_WINDOW = 1.0  # s of estimates kept to propagate to a late frame's stamp
+
+
+def pose_at(estimate: StateEstimate, t: float) -> np.ndarray:
+    """The estimated base pose (4×4, navigation frame) at ``t``, extrapolated from ``estimate`` with its velocity and yaw rate."""
+    dt = t - estimate.stamp
+    R = rotation_matrix(estimate.orientation)
+    if dt != 0.0:
+        yaw_rate = float((R @ np.asarray(estimate.angular_velocity))[2])  # body rates → about the frame's z
+        R = rot_z(yaw_rate * dt) @ R
+    return transform(np.asarray(estimate.position) + np.asarray(estimate.velocity) * dt, R)
+
+
+class EstimateHistory:
+    """A robot's onboard estimates of the last ``window`` s; its pose at a time in (or just past) that window."""
+
+    def __init__(self, window: float = ESTIMATE_WINDOW):
+        self.window = window
+        self.samples: deque[StateEstimate] = deque()
+
+    def add(self, estimate: StateEstimate | None) -> None:
+        """Keep ``estimate`` if it is newer than the last one kept."""
+        if estimate is None or (self.samples and estimate.stamp <= self.samples[-1].stamp):
+            return
+        self.samples.append(estimate)
+        while len(self.samples) > 2 and self.samples[1].stamp < estimate.stamp - self.window:
+            self.samples.popleft()
+
+    @property
+    def latest(self) -> StateEstimate | None:
+        """The newest estimate kept (``None``: none yet)."""
+        return self.samples[-1] if self.samples else None
+
+    def at(self, t: float) -> np.ndarray | None:
+        """The pose (4×4) at ``t``, propagated from the newest estimate not later than ``t`` (or the oldest one)."""
+        if not self.samples:
+            return None
+        chosen = self.samples[0]
+        for estimate in reversed(self.samples):
+            if estimate.stamp <= t:
+                chosen = estimate
+                break
+        return pose_at(chosen, t)
+
+
+class RelativePoseFilter:
+    """``C``, the drift between the carrier's frame N and the UAV's frame O, re-anchored by each measurement of P_Q^M.
+
+    Before any measurement ``C`` is the identity (both frames start at the
+    world frame the mission declares). The first measurement sets it; every
+    later one is compared with the prediction ``T_N_M⁻¹ · C · T_O_Q`` at its
+    stamp: the innovation (position in M, heading) moves the fused pose by
+    ``gain`` and ``C`` is re-derived from it. A measurement farther than
+    ``gate`` (m, or ``gate`` / 0.1 m rad in heading) from the prediction is an
+    outlier (a tag at the image border, a wrong planar-pose branch) and is
+    dropped, unless ``max_rejections`` come in a row: then the prediction
+    itself is wrong (the drift grew while the marker was hidden) and the
+    filter restarts from the measurement.
+
+    Args:
+        gain: weight (0…1] of a new measurement; gate: outlier threshold (m);
+        max_rejections: consecutive outliers that restart the filter.
+    """
+
+    def __init__(self, gain: float = 0.3, gate: float = 0.03, max_rejections: int = 5):
+        if not 0.0 < gain <= 1.0 or gate <= 0.0 or max_rejections < 1:
+            raise ValueError(f"RelativePoseFilter needs 0 < gain <= 1, gate > 0, max_rejections >= 1; got {gain}, {gate}, {max_rejections}")
+        self.gain, self.gate, self.max_rejections = gain, gate, max_rejections
+        self.C = np.eye(4)  # T_N_O: the UAV's odometry frame in the carrier's navigation frame
+        self.measured = False
+        self.rejections = 0
+
+    def predict(self, T_N_M: np.ndarray, T_O_Q: np.ndarray) -> np.ndarray:
+        """P_Q^M (4×4) from the two robots' estimates and the present drift ``C``."""
+        R_N_M, p_N_M = T_N_M[:3, :3], T_N_M[:3, 3]
+        T_N_Q = self.C @ T_O_Q
+        return transform(R_N_M.T @ (T_N_Q[:3, 3] - p_N_M), R_N_M.T @ T_N_Q[:3, :3])
+
+    def measure(self, T_M_Q: np.ndarray, T_N_M: np.ndarray, T_O_Q: np.ndarray) -> bool:
+        """Fuse a measurement of P_Q^M taken when the estimates read ``T_N_M``, ``T_O_Q``; False when it was rejected."""
+        predicted = self.predict(T_N_M, T_O_Q)
+        dp = T_M_Q[:3, 3] - predicted[:3, 3]
+        dyaw = math.remainder(yaw_of_rotation(T_M_Q[:3, :3]) - yaw_of_rotation(predicted[:3, :3]), math.tau)
+        gain = 1.0
+        if self.measured and self.rejections < self.max_rejections:
+            if np.linalg.norm(dp) > self.gate or abs(dyaw) * 0.1 > self.gate:
+                self.rejections += 1
+                return False
+            gain = self.gain
+        self.rejections = 0
+        self.measured = True
+        p_fused_N = T_N_M[:3, :3] @ (predicted[:3, 3] + gain * dp) + T_N_M[:3, 3]
+        R_C = rot_z(gain * dyaw) @ self.C[:3, :3]  # turning C about z turns the predicted heading in M as much
+        R_C = rot_z(yaw_of_rotation(R_C))  # C stays a turn about z: roll and pitch are the UAV's IMU's
+        self.C = transform(p_fused_N - R_C @ T_O_Q[:3, 3], R_C)
+        return True
+
+
+@dataclass(frozen=True)
+class RelativeState:
+    """The UAV relative to the carrier now, from the estimates and the last frames.
+
+    Attributes:
+        t: time (s) of this state.
+        T_M_Q: P_Q^M (4×4), ``None`` until both robots' estimates are known.
+        v_M: the UAV's velocity relative to frame M, in M's axes (m/s).
+        uav_speed: the UAV's ground speed (m/s), from its estimate.
+        measured: True once a camera frame anchored the estimate.
+        seen_at: stamp (s) of the last frame fused (−inf: none).
+    """
+
+    t: float
+    T_M_Q: np.ndarray | None = field(default=None, repr=False)
+    v_M: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    uav_speed: float = 0.0
+    measured: bool = False
+    seen_at: float = -math.inf
+
+    @property
+    def yaw_M(self) -> float | None:
+        """UAV heading in M (rad), ``None`` without a pose."""
+        return None if self.T_M_Q is None else yaw_of_rotation(self.T_M_Q[:3, :3])
+
+
+class RelativePose:
+    """P_Q^M now: :class:`RelativePoseFilter` over the carrier's estimate, the UAV's link telemetry and the eye-in-hand frames.
+
+    Runs on the carrier's computer: the carrier's own estimate, the UAV's as
+    the team link delivers it, the frames of the carrier's
+    :class:`~.observer.EyeInHandObserver`.
+
+    Args:
+        carrier: the carrier's onboard interface (``estimate()``, ``link_offset``).
+        link: the team link as the carrier reads it (``latest(uav)``).
+        uav: the UAV's name.
+        observer: the carrier's eye-in-hand observer; ``None``: the estimates alone, no frame fused.
+        gain, gate: of the :class:`RelativePoseFilter`.
+        since: UAV telemetry stamped before this time (s) is ignored (e.g. before its estimator was reset).
+    """
+
+    def __init__(self, carrier, link, uav: str, observer, gain: float = 0.3, gate: float = 0.03, since: float = -math.inf):
+        self.carrier, self.link, self.uav, self.observer = carrier, link, uav, observer
+        p_base_M, R_base_M = carrier.link_offset("arm_base")
+        self.T_base_M = transform(p_base_M, R_base_M)
+        self.filter = RelativePoseFilter(gain, gate)
+        self.carrier_history = EstimateHistory()
+        self.uav_history = EstimateHistory()
+        self.fused_stamp = -math.inf
+        self.seen_at = -math.inf
+        self.since = since
+
+    def T_N_M(self, t: float) -> np.ndarray | None:
+        """Frame M in the carrier's navigation frame at ``t``, from its estimate."""
+        T_N_base = self.carrier_history.at(t)
+        return None if T_N_base is None else T_N_base @ self.T_base_M
+
+    def update(self, now: float) -> RelativeState:
+        """Read the estimates, fuse a new frame in which the bundle was measured, and propagate to ``now``."""
+        self.carrier_history.add(self.carrier.estimate())
+        message = self.link.latest(self.uav)
+        if message is not None and message.payload.stamp >= self.since:
+            self.uav_history.add(message.payload)
+        observation = None if self.observer is None else self.observer.observe(now)
+        if observation is not None and observation.seen and observation.stamp > self.fused_stamp:
+            self.fused_stamp = observation.stamp
+            T_N_M, T_O_Q = self.T_N_M(observation.stamp), self.uav_history.at(observation.stamp)
+            if T_N_M is not None and T_O_Q is not None and self.filter.measure(observation.pose.T_M_Q, T_N_M, T_O_Q):
+                self.seen_at = observation.stamp
+        T_N_M, T_O_Q = self.T_N_M(now), self.uav_history.at(now)
+        if T_N_M is None or T_O_Q is None:
+            return RelativeState(now, seen_at=self.seen_at)
+        T_M_Q = self.filter.predict(T_N_M, T_O_Q)
+        uav, carrier = self.uav_history.latest, self.carrier_history.latest
+        v_uav_N = self.filter.C[:3, :3] @ np.asarray(uav.velocity)
+        R_N_base = rotation_matrix(carrier.orientation)
+        w_N = R_N_base @ np.asarray(carrier.angular_velocity)
+        p_uav_N = (T_N_M @ np.append(T_M_Q[:3, 3], 1.0))[:3]
+        v_frame_N = np.asarray(carrier.velocity) + np.cross(w_N, p_uav_N - carrier.position)  # M's point under the UAV
+        v_M = T_N_M[:3, :3].T @ (v_uav_N - v_frame_N)
+        return RelativeState(now, T_M_Q, v_M, float(np.linalg.norm(uav.velocity)), self.filter.measured, self.seen_at)
