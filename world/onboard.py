@@ -372,12 +372,18 @@ class CarrierOnboard(WheeledOnboard):
         """Joint angles (rad) of a named arm pose."""
         return self._robot.arm_pose(name)  # type: ignore[attr-defined, no-any-return]
 
+    def arm_mount(self) -> tuple[np.ndarray, np.ndarray]:
+        """Frame M (``arm_base``) in the ``base_footprint`` frame the estimate is of: position (m), rotation (URDF)."""
+        p_fp, R_fp = self.link_offset("base_footprint")
+        p_M, R_M = self.link_offset("arm_base")
+        return R_fp.T @ (p_M - p_fp), R_fp.T @ R_M
+
     def arm_base_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """Estimated pose of frame M: the base estimate composed with M's mount in the URDF (position m, quaternion)."""
+        """Estimated pose of frame M: the footprint estimate composed with M's mount in the URDF (position m, quaternion)."""
         estimate = self.estimate()
-        p_M_base, R_base_M = self.link_offset("arm_base")
+        p_M_fp, R_fp_M = self.arm_mount()
         R = estimate.rotation
-        return estimate.position + R @ p_M_base, quaternion_from_matrix(R @ R_base_M)
+        return estimate.position + R @ p_M_fp, quaternion_from_matrix(R @ R_fp_M)
 
 
 def onboard_of(robot: Robot) -> Onboard:

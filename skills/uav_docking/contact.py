@@ -95,7 +95,7 @@ class Contact(Skill):
         """Largest UAV distance from its hold pose in M and camera offset from the bundle (m) to begin the approach."""
         settle_time: float = Field(0.5, ge=0.0)
         """Time (s) tracking must stay settled before the approach begins."""
-        blind_range: float = Field(0.18, ge=0.0)
+        blind_range: float = Field(0.22, ge=0.0)
         """Gap (m) between Part A and Part B below which an unseen marker is expected (the camera is too close)."""
         lost_timeout: float = Field(0.3, gt=0.0)
         """Time (s) without the marker, farther than ``blind_range``, that cancels the contact."""
@@ -105,8 +105,9 @@ class Contact(Skill):
         """Gap (m) the approach holds until Part B is within ``align_tolerance`` of Part A's axis (no push on a misaligned UAV)."""
         align_tolerance: float = Field(0.008, gt=0.0)
         """Lateral offset (m) of Part B from Part A's axis within which the last ``align_gap`` is closed (inside the magnet's 10 mm reach)."""
-        D_c: float = Field(0.006, gt=0.0)
-        """Gap D_c (m) at which the electromagnet is switched on, §IV-C (within its 10 mm reach; it closes the gap to 0 mm)."""
+        D_c: float = Field(0.010, gt=0.0)
+        """Estimated gap D_c (m) at which the electromagnet is switched on, §IV-C: its 10 mm reach (it closes the gap to 0 mm); a gap
+        the estimate reads short is caught by the capture retry."""
         rest_gap: float = Field(0.005, ge=0.0)
         """Gap (m) at which Part A stops below Part B (inside D_c): the magnet, not the arm, makes the contact."""
         capture_step: float = Field(0.004, ge=0.0)
@@ -234,7 +235,7 @@ class Contact(Skill):
         settled = abs(gap - self.last_axial) <= SETTLED_SPEED * max(now - self.last_tick, 1e-9)
         self.last_axial, self.last_tick = gap, now
         switch = self.device.contact_switch
-        if self.phase == "approach" and (switch or (gap <= max(p.D_c, rest + 1e-3) and aligned and settled)):
+        if self.phase == "approach" and (switch or (gap <= p.D_c and aligned and settled)):
             self.device.magnet_on()  # Fig. 12b: Part A holds still at D_c, the magnet forces the initial contact
             self.phase, self.captured_at = "capture", now
             phase_event(self, "capture", t_c=round(self.t_c, 3), gap_estimate=round(gap, 4), contact_switch=switch)

@@ -71,7 +71,7 @@ class CarrierFrame:
 
     @classmethod
     def from_estimate(cls, estimate: StateEstimate, mount: tuple[np.ndarray, np.ndarray]) -> CarrierFrame:
-        """Frame M from the carrier's base estimate and M's ``mount`` in the base frame (position m, rotation; URDF)."""
+        """Frame M from the carrier's estimate (of its ``base_footprint``) and M's ``mount`` in that frame (position m, rotation; URDF)."""
         R = rotation_matrix(estimate.orientation)
         p_base = np.asarray(estimate.position, dtype=float)
         p_M_base, R_base_M = mount
@@ -80,7 +80,7 @@ class CarrierFrame:
     @classmethod
     def of(cls, carrier: Any) -> CarrierFrame:
         """Frame M of ``carrier`` (onboard interface or command port) from its onboard estimate."""
-        return cls.from_estimate(carrier.estimate(), carrier.link_offset("arm_base"))
+        return cls.from_estimate(carrier.estimate(), carrier.arm_mount())
 
     @property
     def yaw(self) -> float:

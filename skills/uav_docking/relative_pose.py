@@ -169,7 +169,7 @@ class RelativePose:
     :class:`~.observer.EyeInHandObserver`.
 
     Args:
-        carrier: the carrier's onboard interface (``estimate()``, ``link_offset``).
+        carrier: the carrier's onboard interface (``estimate()``, ``arm_mount()``).
         link: the team link as the carrier reads it (``latest(uav)``).
         uav: the UAV's name.
         observer: the carrier's eye-in-hand observer; ``None``: the estimates alone, no frame fused.
@@ -179,8 +179,7 @@ class RelativePose:
 
     def __init__(self, carrier, link, uav: str, observer, gain: float = 0.3, gate: float = 0.03, since: float = -math.inf):
         self.carrier, self.link, self.uav, self.observer = carrier, link, uav, observer
-        p_base_M, R_base_M = carrier.link_offset("arm_base")
-        self.T_base_M = transform(p_base_M, R_base_M)
+        self.T_base_M = transform(*carrier.arm_mount())  # M in the footprint frame the carrier's estimate is of
         self.filter = RelativePoseFilter(gain, gate)
         self.carrier_history = EstimateHistory()
         self.uav_history = EstimateHistory()
