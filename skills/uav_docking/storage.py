@@ -33,6 +33,7 @@ from marsupial.trees.skill import NodeParams, Skill
 
 from .pose import invert
 from .relative_hold import PART_A_LINK, CarrierFrame, HoldGains, command_hold, part_b_transform, relative_pose_of
+from .relative_pose import RelativeState
 from .selection import yaw_of_rotation
 from .team import DOCKING_FLAG, UAV_STORED, carrier_port, phase_event
 
@@ -132,7 +133,7 @@ class Deploy(Skill):
             weight = uav.mass * GRAVITY
             self.feedback_message = f"motors spinning up: thrust {uav.thrust:.2f} N of {weight:.2f} N"
             if uav.thrust >= weight:
-                T_M_Q = self.hand_over()
+                T_M_Q = self.T_M_Q_release = self.hand_over()
                 self.p_clear_M = T_M_Q[:3, 3] + np.array([0.0, 0.0, self.params.clearance])
                 self.yaw_clear_M = yaw_of_rotation(T_M_Q[:3, :3])
                 self.relative = relative_pose_of(self, self.carrier, fuse=False, since=self.now)  # estimates after the hand-over
@@ -163,6 +164,8 @@ class Deploy(Skill):
     def climb(self) -> Status:
         """Climb to the clearance height above the release point, moving with the carrier (on the estimates)."""
         state = self.relative.update(self.now)
+        if state.T_M_Q is None:  # no telemetry since the hand-over yet: the UAV is where it was released
+            state = RelativeState(self.now, self.T_M_Q_release)
         error = command_hold(self.robot, state, self.p_clear_M, self.yaw_clear_M, CarrierFrame.of(self.carrier), self.gains)
         if error is None:
             self.feedback_message = "waiting for the UAV's estimate over the team link"
