@@ -12,13 +12,16 @@ from py_trees.common import Status
 from marsupial.trees.recorder import Recorder
 from marsupial.trees.skill import NodeParams, RunContext
 from marsupial.world import World
+from marsupial.world.scoring import Referee
 
 
 class Harness:
     """A run context over ``world`` that ticks a tree at ``tick_hz`` (simulated), like the runner does.
 
-    With ``log_path`` the nodes' events and metrics and the robots' poses
-    (every tick) are recorded to that MCAP file; :meth:`close` finalises it.
+    With ``log_path`` the nodes' events and metrics and the robots' true
+    and estimated poses (every tick) are recorded to that MCAP file;
+    :meth:`close` finalises it. The runner's referee scores the run on truth
+    (tracking errors, unintended contacts), as in a mission run.
     """
 
     def __init__(self, world: World, tick_hz: float = 10.0, log_path: str | Path | None = None):
@@ -26,6 +29,7 @@ class Harness:
         self.world = world
         self.recorder = Recorder(log_path, {"mission_name": "harness"}) if log_path is not None else None
         self.context = RunContext(world=world, recorder=self.recorder)
+        world.add_actor(Referee(world, self.context))
         self.period = 1.0 / tick_hz
 
     def node(self, cls: type, robot: str | None = None, name: str | None = None, **params) -> Behaviour:
@@ -40,7 +44,12 @@ class Harness:
             self.context.arbiter.new_tick()
             root.tick_once()
             if self.recorder is not None:
-                self.recorder.log_robot_poses(self.world.now, {n: r.pose() for n, r in self.world.robots.items()})
+                robots = self.world.robots.items()
+                self.recorder.log_robot_poses(
+                    self.world.now,
+                    {n: r.pose() for n, r in robots},
+                    {n: (r.estimator.estimate().position, r.estimator.estimate().orientation) for n, r in robots},
+                )
             if on_tick is not None:
                 on_tick()
             if root.status in (Status.SUCCESS, Status.FAILURE) or self.world.now + 1e-9 >= end:

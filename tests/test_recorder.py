@@ -27,6 +27,7 @@ from marsupial.world.scene import SceneObject
 FOXGLOVE_TOPICS = {
     "/tf": "foxglove.FrameTransform",
     "/uav/pose": "foxglove.PoseInFrame",
+    "/truth/uav/pose": "foxglove.PoseInFrame",
     "/scene": "foxglove.SceneUpdate",
     "/uav/camera/image": "foxglove.CompressedImage",
     "/log": "foxglove.Log",
@@ -70,7 +71,11 @@ def test_every_channel_round_trips(tmp_path):
         add_cylinder(world, "barrel", 0.3, 0.9, [0.0, 2.0, 0.45])
         rec.log_scene(world)
         rec.log_event(0.0, "run_start", mission="x", seed=5)
-        rec.log_robot_poses(0.5, {"uav": (np.array([1.0, 2.0, 3.0]), np.array([0.0, 0.0, 0.0, 1.0]))})
+        rec.log_robot_poses(
+            0.5,
+            {"uav": (np.array([1.0, 2.0, 3.0]), np.array([0.0, 0.0, 0.0, 1.0]))},
+            {"uav": (np.array([1.1, 2.0, 3.0]), np.array([0.0, 0.0, 0.0, 1.0]))},
+        )
         rec.log_metric(0.5, "battery", np.float32(0.75), robot="uav")
         rec.log_text(0.5, "warning", "low battery")
         assert rec.log_image(0.6, "uav/camera", image, format="png", stamp=0.55)
@@ -96,7 +101,9 @@ def test_every_channel_round_trips(tmp_path):
     assert tf.data["translation"] == {"x": 1.0, "y": 2.0, "z": 3.0} and tf.data["rotation"]["w"] == 1.0
     t, xyz, q = log.poses("uav", orientation=True)
     assert t.tolist() == [0.5] and xyz.tolist() == [[1.0, 2.0, 3.0]] and q.tolist() == [[0, 0, 0, 1]]
-    assert log.messages("/uav/pose")[0].data["frame_id"] == "world"
+    assert log.messages("/truth/uav/pose")[0].data["frame_id"] == "world"
+    _, estimated = log.poses("uav", estimate=True)  # the onboard estimate, beside the truth
+    assert estimated.tolist() == [[1.1, 2.0, 3.0]]
 
     assert log.metrics == [{"t": 0.5, "name": "battery", "value": 0.75, "labels": {"robot": "uav"}}]
     lines = [(m.data["level"], m.data["message"]) for m in log.messages("/log")]
@@ -132,7 +139,7 @@ def test_schema_names_and_encodings_match_foxglove(tmp_path):
     path = tmp_path / "run.mcap"
     with World() as world, Recorder(path, record_images=True) as rec:
         rec.log_scene(world)
-        rec.log_robot_poses(0.0, {"uav": ([0, 0, 0], [0, 0, 0, 1])})
+        rec.log_robot_poses(0.0, {"uav": ([0, 0, 0], [0, 0, 0, 1])}, {"uav": ([0, 0, 0], [0, 0, 0, 1])})
         rec.log_image(0.0, "uav/camera", np.zeros((4, 4, 3), np.uint8))
         rec.log_metric(0.0, "m", 1)
         rec.log_tree(0.0, py_trees.behaviours.Success("s"))

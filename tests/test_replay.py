@@ -32,10 +32,12 @@ def test_committed_log_reads_back():
     assert log.metadata["mission"].startswith("mission: small_run\n")
     assert log.topic_names == [
         "/carrier/pose", "/events", "/log", "/metrics", "/scene", "/tf", "/tree", "/tree/xml",
-        "/uav/camera/image", "/uav/pose",
+        "/truth/carrier/pose", "/truth/uav/pose", "/uav/camera/image", "/uav/pose",
     ]
     t, xyz = log.poses("carrier")
     assert np.allclose(t, np.arange(10) * 0.1) and np.allclose(xyz[:, 0], 0.5 * t) and xyz.shape == (10, 3)
+    _, estimated = log.poses("carrier", estimate=True)
+    assert np.allclose(estimated[:, 0], 0.51 * t)  # the estimate, beside the truth
     t, battery = log.metric("battery", robot="uav")
     assert np.allclose(battery, 1.0 - 0.05 * np.arange(10))
     assert log.metric("battery", robot="carrier")[0].size == 0

@@ -390,12 +390,39 @@ for _cls in (*NODE_CLASSES.values(), PriorityEntry):
 # ------------------------------------------------------------------------ mission
 
 
+class TeamLinkSpec(BaseModel):
+    """The team's radio: one-way latency, its jitter, message loss and the estimate telemetry rate."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    latency_s: float = Field(0.02, ge=0, le=5.0, description="One-way latency of a message (s).")
+    jitter_s: float = Field(0.01, ge=0, le=5.0, description="Standard deviation of the extra delay (s).")
+    drop: float = Field(0.02, ge=0, le=1, description="Probability that a message is lost.")
+    telemetry_hz: float = Field(20.0, gt=0, le=240, description="Rate at which every robot broadcasts its estimate (Hz).")
+
+
+class SensingSpec(BaseModel):
+    """How the robots sense: one knob scaling every noise figure, and the team link."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    noise_scale: float = Field(
+        1.0,
+        ge=0,
+        le=100,
+        description=(
+            "Multiplies every sensor noise, bias, drift, latency and loss figure (docs/world.md lists them with "
+            "their sources); 1: the sourced values, 0: perfect sensing (for debugging only)."
+        ),
+    )
+    team_link: TeamLinkSpec = Field(default_factory=TeamLinkSpec)
+
+
 class WorldSpec(BaseModel):
-    """The world to run in: scene name, seed of every noise source, disturbances."""
+    """The world to run in: scene name, seed of every noise source, sensing, disturbances."""
 
     model_config = ConfigDict(extra="forbid")
     scene: str | None = Field(None, description="Scene name (world/scenes/<name>.yaml); none: an empty floor.")
     seed: int = Field(0, description="Seed of all randomness in the world.")
+    sensing: SensingSpec = Field(default_factory=SensingSpec)
     disturbances: dict[str, Any] = Field(default_factory=dict, description="Disturbances (wind, sensor faults …).")
 
 

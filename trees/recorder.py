@@ -2,20 +2,22 @@
 
 Channels (see ``docs/logs.md`` for every field):
 
-===================  ================================  ==============================================
-topic                schema                            what
-===================  ================================  ==============================================
-``/events``          ``marsupial.Event``               run_start, state_change, preemption, operator,
-                                                       outcome, run_end, error
-``/metrics``         ``marsupial.Metric``              ``{name, value, labels}``
-``/log``             ``foxglove.Log``                  one text line per event, plus free text
-``/tf``              ``foxglove.FrameTransform``       ``world`` -> ``<robot>`` per robot
-``/<robot>/pose``    ``foxglove.PoseInFrame``          robot base pose in ``world``
-``/scene``           ``foxglove.SceneUpdate``          static scene geometry, once at start
-``/<camera>/image``  ``foxglove.CompressedImage``      opt-in camera frames (png/jpeg)
-``/tree``            ``nav2_msgs/msg/BehaviorTreeLog`` tree status changes (``event_log``), on change
-``/tree/xml``        ``std_msgs/msg/String``           the tree as BehaviorTree.CPP XML (``data``)
-===================  ================================  ==============================================
+=======================  =================================  ==============================================
+topic                    schema                             what
+=======================  =================================  ==============================================
+``/events``              ``marsupial.Event``                run_start, state_change, preemption, operator,
+                                                            outcome, run_end, error, unintended_contact
+``/metrics``             ``marsupial.Metric``               ``{name, value, labels}``
+``/log``                 ``foxglove.Log``                   one text line per event, plus free text
+``/tf``                  ``foxglove.FrameTransform``        ``world`` -> ``<robot>`` per robot (true pose)
+``/truth/<robot>/pose``  ``foxglove.PoseInFrame``           robot base pose in ``world`` (simulator truth)
+``/<robot>/pose``        ``foxglove.PoseInFrame``           the robot's onboard estimate (its navigation
+                                                            frame, which starts at ``world``)
+``/scene``               ``foxglove.SceneUpdate``           static scene geometry, once at start
+``/<camera>/image``      ``foxglove.CompressedImage``       opt-in camera frames (png/jpeg)
+``/tree``                ``nav2_msgs/msg/BehaviorTreeLog``  tree status changes (``event_log``), on change
+``/tree/xml``            ``std_msgs/msg/String``            the tree as BehaviorTree.CPP XML (``data``)
+=======================  =================================  ==============================================
 
 The ``/tree`` pair follows what the community's Foxglove behaviour-tree panel
 reads (a ``data`` string of XML on one topic, ``nav2_msgs`` ``event_log``
@@ -652,16 +654,31 @@ class Recorder:
         if ns is not None:
             self._write_log(ns, int(level), str(message), name)
 
-    def log_robot_poses(self, t: float, poses: Mapping[str, tuple[Sequence[float], Sequence[float]]]) -> None:
-        """Robot base poses in the world frame: ``{name: (position m, quaternion [x, y, z, w])}``.
+    def log_robot_poses(
+        self,
+        t: float,
+        poses: Mapping[str, tuple[Sequence[float], Sequence[float]]],
+        estimates: Mapping[str, tuple[Sequence[float], Sequence[float]]] | None = None,
+    ) -> None:
+        """True base poses in the world frame and onboard estimates: ``{name: (position m, quaternion [x, y, z, w])}``.
 
         Each robot gets a ``/tf`` transform ``world`` -> ``<name>`` and a
-        ``/<name>/pose`` PoseInFrame.
+        ``/truth/<name>/pose`` PoseInFrame from ``poses`` (simulator truth),
+        and a ``/<name>/pose`` PoseInFrame from ``estimates`` (what the robot
+        believes, in its navigation frame, which starts at ``world``), so any
+        log shows the estimation error.
         """
         ns = self._time(t, "robot poses")
         if ns is None:
             return
         stamp = _stamp(ns)
+        for name, (position, quaternion) in (estimates or {}).items():
+            self._write(
+                f"/{name}/pose",
+                POSE_SCHEMA,
+                ns,
+                {"timestamp": stamp, "frame_id": WORLD_FRAME, "pose": {"position": _xyz(position), "orientation": _xyzw(quaternion)}},
+            )
         for name, (position, quaternion) in poses.items():
             translation, rotation = _xyz(position), _xyzw(quaternion)
             self._write(
@@ -677,7 +694,7 @@ class Recorder:
                 },
             )
             self._write(
-                f"/{name}/pose",
+                f"/truth/{name}/pose",
                 POSE_SCHEMA,
                 ns,
                 {

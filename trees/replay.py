@@ -162,14 +162,17 @@ class RunLog:
         except KeyError:
             raise LogError(f"{self.path}: {_unknown('topic', topic, self.schemas)}") from None
 
-    def poses(self, robot: str, orientation: bool = False) -> tuple[np.ndarray, ...]:
-        """``(t, xyz)`` of ``robot``'s base in the world frame: arrays (N,) s and (N, 3) m.
+    def poses(self, robot: str, orientation: bool = False, estimate: bool = False) -> tuple[np.ndarray, ...]:
+        """``(t, xyz)`` of ``robot``'s base: arrays (N,) s and (N, 3) m.
 
-        With ``orientation=True``: ``(t, xyz, quaternions)``, quaternions (N, 4) ``[x, y, z, w]``.
+        By default the TRUE pose in the world frame (``/truth/<robot>/pose``:
+        for scoring); with ``estimate=True`` the robot's onboard estimate
+        (``/<robot>/pose``, its navigation frame). With ``orientation=True``:
+        ``(t, xyz, quaternions)``, quaternions (N, 4) ``[x, y, z, w]``.
         """
-        topic = f"/{robot}/pose"
+        topic = f"/{robot}/pose" if estimate else f"/truth/{robot}/pose"
         if topic not in self._topics:
-            robots = [name[1:-5] for name, schema in self.schemas.items() if schema == "foxglove.PoseInFrame"]
+            robots = [name[7:-5] for name in self.schemas if name.startswith("/truth/") and name.endswith("/pose")]
             raise LogError(f"{self.path}: {_unknown('robot', robot, robots)}")
         messages = self._topics[topic]
         t = np.array([m.t for m in messages])

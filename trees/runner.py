@@ -47,6 +47,8 @@ from rich.text import Text
 from marsupial.world import World
 from marsupial.world.disturbances import apply_disturbances
 from marsupial.world.errors import UnknownNameError, WorldError
+from marsupial.world.scoring import Referee
+from marsupial.world.team_link import TeamLinkConfig
 
 from .compiler import CompiledTree, compile_mission
 from .errors import MissionError, one_of, suggest
@@ -108,7 +110,9 @@ def build_world(mission: Mission, seed: int, gui: bool = False) -> World:
     """
     spec = mission.spec
     try:
-        world = World(scene=spec.world.scene, seed=seed, gui=gui)
+        sensing = spec.world.sensing
+        link = TeamLinkConfig(**sensing.team_link.model_dump())
+        world = World(scene=spec.world.scene, seed=seed, gui=gui, noise_scale=sensing.noise_scale, team_link=link)
     except WorldError as err:
         raise _located(mission, ("world", "scene"), err) from None
     try:
@@ -300,12 +304,13 @@ def run_mission(
         log.parent.mkdir(parents=True, exist_ok=True)
     recorder = Recorder(log, _metadata(mission, seed, until), record_images=record_images) if log else None
     context.recorder = recorder
+    world.add_actor(Referee(world, context))  # truth-based scores, world side: skills never read them
     display = _Progress(console, progress)
     outcome, message, ticks = "failure", "", 0
     started = time.perf_counter()
     try:
         with recorder if recorder is not None else contextlib.nullcontext(), _signals_end_the_run(recorder):
-            outcome, ticks = _loop(mission, tree, context, until, gui or operator_stdin, display, started)
+            outcome, ticks = _loop(mission, tree, world, context, until, gui or operator_stdin, display, started)
             if tree.root.status == Status.RUNNING:
                 tree.root.stop(Status.INVALID)  # skills still running leave their robots safe
             context.event("run_end", outcome=outcome, sim_time=world.now, ticks=ticks)
@@ -335,9 +340,16 @@ def run_mission(
     return result
 
 
+def _estimated_pose(robot: Any) -> tuple[Any, Any]:
+    """A robot's onboard estimate as ``(position, quaternion)`` for the log."""
+    estimate = robot.estimator.estimate()
+    return estimate.position, estimate.orientation
+
+
 def _loop(
     mission: Mission,
     tree: CompiledTree,
+    world: World,
     context: RunContext,
     until: float | None,
     real_time: bool,
@@ -349,8 +361,6 @@ def _loop(
     ``real_time`` paces the loop to the wall clock (GUI or live operator: a
     person watches or types); the simulation itself never reads the clock.
     """
-    world = context.world
-    assert world is not None
     recorder, channel, arbiter = context.recorder, context.operator, context.arbiter
     assert channel is not None
     period = 1.0 / mission.spec.run.tick_hz
@@ -364,7 +374,11 @@ def _loop(
         now = world.now
         if recorder is not None and now + 1e-9 >= next_pose:
             next_pose += POSE_PERIOD
-            recorder.log_robot_poses(now, {n: r.pose() for n, r in world.robots.items()})
+            recorder.log_robot_poses(
+                now,
+                {n: r.pose() for n, r in world.robots.items()},
+                {n: _estimated_pose(r) for n, r in world.robots.items()},
+            )
         if now + 1e-9 >= next_metric:
             next_metric += METRIC_PERIOD
             for name, robot in world.robots.items():

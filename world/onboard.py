@@ -22,9 +22,10 @@ mission with truth calls from skill code trapped
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar
+from types import CodeType
+from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
 
 import numpy as np
 
@@ -36,6 +37,25 @@ from .sensors.base import Reading
 if TYPE_CHECKING:
     from .robots.base import Robot
     from .sensors.base import Sensor
+
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+#: code of the world-side functions that simulate a piece of hardware (an encoder, a switch, a servo)
+HARDWARE_CODE: set[CodeType] = set()
+
+
+def simulates_hardware(function: F) -> F:
+    """Mark a world-side function that simulates hardware and may therefore read simulator truth.
+
+    An encoder reading, a limit switch, a servo holding its position or a
+    device's latch acts on the physics the way the real part does; the
+    onboard interface calls it on a skill's behalf. Sensors' ``read`` /
+    ``measure`` and the physics-step hooks are hardware by construction.
+    The sensing-boundary test accepts truth reads only below such a frame.
+    """
+    HARDWARE_CODE.add(function.__code__)
+    return function
 
 
 @dataclass(frozen=True)

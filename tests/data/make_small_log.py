@@ -82,6 +82,10 @@ def make_small_log(path: Path) -> None:
                     "carrier": ([0.5 * t, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]),
                     "uav": ([0.5 * t, 0.0, 0.3 + t], [0.0, 0.0, math.sin(t / 2), math.cos(t / 2)]),
                 },
+                {  # onboard estimates drifting 1 cm/s ahead of the truth
+                    "carrier": ([0.51 * t, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]),
+                    "uav": ([0.51 * t, 0.0, 0.3 + t], [0.0, 0.0, math.sin(t / 2), math.cos(t / 2)]),
+                },
             )
             rec.log_metric(t, "battery", round(1.0 - 0.05 * tick, 6), robot="uav")
             if tick == 2:

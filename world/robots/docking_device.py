@@ -41,6 +41,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet
 
+from ..onboard import simulates_hardware
 from .attachment import place_link_at, set_collisions, weld
 from .base import rotation_matrix
 
@@ -166,6 +167,7 @@ class DockingDevice:
         Part B's centre and axis within the lateral and tilt tolerances the conical structure centres (§IV-C)."""
         return abs(self.offset_to(uav)[0]) <= self.contact_distance and self.aligned(uav)
 
+    @simulates_hardware
     def contact_switch(self) -> bool:
         """The limit switch under Part A's face: closed while some UAV's Part B rests seated on it (device state)."""
         return self._uav_in_contact() is not None
@@ -187,6 +189,7 @@ class DockingDevice:
         """De-energise the electromagnet (a locked UAV stays held by the levers)."""
         self.magnet = False
 
+    @simulates_hardware
     def lock(self) -> bool:
         """Start closing the levers on the UAV in contact with Part A.
 
@@ -206,6 +209,7 @@ class DockingDevice:
         self._lock_due_step = self.world.clock.steps + self.world.clock.steps_for(self.lock_time)
         return True
 
+    @simulates_hardware
     def release(self) -> None:
         """Open the levers and switch the magnet off; a docked UAV is freed (``on_released()``)."""
         self.magnet = False

@@ -37,7 +37,7 @@ import pybullet
 
 from ..errors import UnknownNameError
 from ..kinematics import ArmKinematics
-from ..onboard import CarrierOnboard
+from ..onboard import CarrierOnboard, simulates_hardware
 from ..sensors.base import SensorConfig
 from ..sensors.camera import Camera, Intrinsics
 from ..sensors.lidar import Lidar, LidarSpec
@@ -250,6 +250,7 @@ class MobileManipulator(WheeledRobot):
         """Move the arm toward ``q`` (6 angles in rad, or a name of :data:`ARM_POSES`), clipped to the limits."""
         self.arm.set_targets(self._configuration(q))
 
+    @simulates_hardware
     def hold_arm(self) -> None:
         """Hold every arm joint where it is now."""
         self.arm.hold()
@@ -262,6 +263,7 @@ class MobileManipulator(WheeledRobot):
         """Arm joint angles now (rad)."""
         return self.arm.positions()
 
+    @simulates_hardware
     def arm_encoders(self) -> np.ndarray:
         """Arm joint angles as the joint encoders read them (rad). PROVISIONAL: exact until the encoder model lands."""
         return self.arm.positions()

@@ -69,7 +69,7 @@ from ..sensors.camera import OPTICAL_DOWN, OPTICAL_FORWARD, Camera, Intrinsics
 from ..sensors.imu import Imu
 from ..sensors.sonar import Sonar
 from ..world import GRAVITY
-from ..onboard import QuadrotorOnboard
+from ..onboard import QuadrotorOnboard, simulates_hardware
 from .base import Robot, pose_from_list, rotation_matrix
 
 if TYPE_CHECKING:
@@ -399,6 +399,7 @@ class Quadrotor(Robot):
         """Stop (at the reference acceleration) and hold the position where the reference stops."""
         self._cmd = (0.0, 0.0, 0.0, 0.0)
 
+    @simulates_hardware
     def set_motors(self, on: bool) -> None:
         """Start or stop the motors. Starting holds the current pose; stopped motors give no thrust and draw nothing.
 

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet
 
-from ..onboard import WheeledOnboard
+from ..onboard import WheeledOnboard, simulates_hardware
 from .base import Robot, pose_from_list, yaw_of
 from .diff_drive import DiffDrive, DiffDriveLimits
 
@@ -98,6 +98,7 @@ class WheeledRobot(Robot):
         yaw = yaw_of(self.pose()[1])
         return float(v[0] * math.cos(yaw) + v[1] * math.sin(yaw))
 
+    @simulates_hardware
     def wheel_speed(self) -> float:
         """Forward speed (m/s) as the wheel encoders measure it. PROVISIONAL: exact until the odometry model lands."""
         return self.speed()

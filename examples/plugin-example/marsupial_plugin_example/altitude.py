@@ -8,13 +8,13 @@ from marsupial.trees.skill import Condition, NodeParams
 
 
 class AltitudeAbove(Condition):
-    """Holds while the robot's base is higher than a height above the world origin."""
+    """Holds while the robot's estimated height is above a value (its onboard estimate, navigation frame)."""
 
     class Params(NodeParams):
         height: float
-        """Height (m, world z) above which the condition holds."""
+        """Height (m, z of the robot's navigation frame) above which the condition holds."""
 
     primary: ClassVar[str] = "height"
 
     def check(self) -> bool:
-        return float(self.robot.pose()[0][2]) > self.params.height
+        return float(self.robot.estimate().position[2]) > self.params.height

@@ -11,7 +11,7 @@ from marsupial.trees.skill import NodeParams
 
 
 class MeteredHover(Hover):
-    """Hold a UAV in place like ``hover``, and record its horizontal drift as metric ``hover_drift``."""
+    """Hold a UAV in place like ``hover``, and record its horizontal drift (as its estimate sees it) as ``hover_drift``."""
 
     class Params(NodeParams):
         seconds: float = Field(1.0, ge=0.0)
@@ -23,11 +23,11 @@ class MeteredHover(Hover):
 
     def start(self) -> None:
         super().start()
-        self._anchor = self.robot.pose()[0][:2].copy()
+        self._anchor = self.robot.estimate().position[:2].copy()
 
     def step(self) -> Status:
         status = super().step()
-        drift = float(np.linalg.norm(self.robot.pose()[0][:2] - self._anchor))
+        drift = float(np.linalg.norm(self.robot.estimate().position[:2] - self._anchor))
         self.write(f"{self.robot_name}/hover_drift", drift)
         self.context.metric("hover_drift", drift, robot=self.robot_name)
         return Status.FAILURE if drift > self.params.max_drift else status
