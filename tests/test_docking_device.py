@@ -223,6 +223,8 @@ def test_bebop2_docks_charges_is_stored_clear_of_the_front_sensors_and_deploys()
         world.step(1.5)
         assert mm.arm_at_target(0.01)
         assert uav.body_id not in mm.lidar.read().data.hit_bodies
+        assert mm.front_rgbd.read() is None  # its first frame arrives 50 ms later
+        world.step(0.05)
         assert uav.body_id not in np.unique(mm.front_rgbd.read().data.segmentation)
         p_rel, _ = _relative(mm, uav)
         mm.drive(1.5, 0.0)

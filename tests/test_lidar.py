@@ -22,7 +22,7 @@ def _wall(world, center, half_extents):
 
 
 def _carrier(world, **options):
-    mm = world.add_robot("mobile_manipulator", sensors={"lidar": {"noise_std": 0.0}}, **options)
+    mm = world.add_robot("mobile_manipulator", sensors={"lidar": {"noise_std": 0.0, "beam_dropout": 0.0}}, **options)
     _wall(world, [WALL_X, 0, 1], [0.1, 8, 1])
     return mm
 

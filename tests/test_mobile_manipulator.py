@@ -168,8 +168,11 @@ def test_sensors_follow_the_paper_and_accept_overrides(world):
         "mobile_manipulator", sensors={"front_rgbd": {"width": 160, "height": 120}, "lidar": {"noise_std": 0.0}}
     )
     assert mm.sensor("lidar") is mm.lidar and mm.lidar.spec.fov_deg == 270.0
+    assert mm.front_rgbd.read() is None  # the first frame arrives after the camera's 50 ms latency
+    world.step(0.05)
     frame = mm.front_rgbd.read().data
     assert frame.rgb.shape == (120, 160, 3) and frame.depth.shape == (120, 160)
+    assert mm.front_rgbd.measures_depth and not mm.eye_in_hand.measures_depth  # RealSense D435 vs PS Eye
     assert mm.lidar.config.noise_std == 0.0
     with pytest.raises(UnknownNameError, match="front_rgbd"):
         world.add_robot("mobile_manipulator", name="other", sensors={"front_rgb": {}})

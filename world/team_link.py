@@ -104,7 +104,9 @@ class TeamLink:
                 self._latest[key] = message
         if steps % self._telemetry_period == 0:
             for name, robot in self.world.robots.items():
-                self.send(name, "estimate", robot.estimator.estimate())
+                estimator = getattr(robot, "estimator", None)  # a rig without an onboard computer sends nothing
+                if estimator is not None:
+                    self.send(name, "estimate", estimator.estimate())
 
 
 class LinkPort:

@@ -1,8 +1,10 @@
 """Onboard state estimation: what each robot's own computer believes about its motion.
 
-Estimators live on the world side (they are fed by the robot's sensors each
-physics step) and are read by skills only through the onboard interface
-(:mod:`marsupial.world.onboard`). See :mod:`.base` for the estimate type.
+Estimators live on the world side (their robot feeds them its sensors) and
+are read by skills only through the onboard interface
+(:mod:`marsupial.world.onboard`). :mod:`.base` has the estimate type,
+:mod:`.flight` the quadrotors' IMU + optical-flow + sonar + barometer
+estimator, :mod:`.ground` wheel odometry and map localisation.
 """
 
 from .base import Estimator, StateEstimate

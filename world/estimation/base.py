@@ -70,7 +70,7 @@ class StateEstimate:
 
 
 class Estimator:
-    """Base of onboard estimators: updated by the world every physics step, read as :meth:`estimate`.
+    """Base of onboard estimators: updated by their robot (world side), read as :meth:`estimate`.
 
     Subclasses implement :meth:`update` (read sensors, propagate, correct)
     and :meth:`reset` (restart from a pose, e.g. a hand-over from a carrier).
@@ -79,7 +79,7 @@ class Estimator:
     frame: str = "odom"
 
     def update(self, dt: float) -> None:
-        """Advance the estimate by one physics step of ``dt`` s (called by the robot, world side)."""
+        """Advance the estimate by ``dt`` s (called by the robot at the estimator's rate, world side)."""
         raise NotImplementedError
 
     def estimate(self) -> StateEstimate:
@@ -89,23 +89,3 @@ class Estimator:
     def reset(self, position: np.ndarray, yaw: float) -> None:
         """Restart the estimate at ``position`` (m) with heading ``yaw`` (rad) in :attr:`frame`, at rest."""
         raise NotImplementedError
-
-
-class ProvisionalPassthrough(Estimator):
-    """TEMPORARY (replaced by the real estimators before this lands): the body's state as an estimate."""
-
-    def __init__(self, robot: object):
-        self._robot = robot
-
-    def update(self, dt: float) -> None:
-        """Nothing to propagate."""
-
-    def estimate(self) -> StateEstimate:
-        """Truth, marked provisional."""
-        r = self._robot
-        p, q = r.link_pose("base_footprint") if "base_footprint" in r.links else r.pose()  # type: ignore[attr-defined]
-        v, w = r.velocity()  # type: ignore[attr-defined]
-        return StateEstimate(r.world.now, self.frame, np.asarray(p), np.asarray(q), np.asarray(v), np.asarray(w), "provisional")  # type: ignore[attr-defined]
-
-    def reset(self, position: np.ndarray, yaw: float) -> None:
-        """Nothing to reset."""

@@ -18,10 +18,10 @@ from ..assets import asset_path
 from marsupial.geometry import yaw_of  # noqa: F401  (re-exported for the robot modules)
 
 from ..errors import UnknownNameError
-from ..estimation.base import Estimator, ProvisionalPassthrough
 from ..onboard import Onboard, base_frame_offset
 
 if TYPE_CHECKING:
+    from ..estimation.base import Estimator
     from ..sensors.base import Sensor
     from ..world import World
 
@@ -62,6 +62,8 @@ class Robot:
     kind: str = ""
     #: the class of its onboard interface (what skills get, :mod:`marsupial.world.onboard`)
     onboard_class: type[Onboard] = Onboard
+    #: the onboard state estimator (set by each kind's constructor, :mod:`marsupial.world.estimation`)
+    estimator: Estimator
 
     def __init__(self, world: World, name: str):
         self.world = world
@@ -71,7 +73,6 @@ class Robot:
         self.links: dict[str, int] = {}
         self.sensors: dict[str, Sensor] = {}
         self._link_offsets: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-        self.estimator: Estimator = ProvisionalPassthrough(self)
 
     # ------------------------------------------------------------ building
     def load_urdf(

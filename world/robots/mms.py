@@ -55,7 +55,9 @@ from ..sensors.camera import OPTICAL_FORWARD, Camera, Intrinsics
 from .arm import ArmController
 from .attachment import set_collisions, weld
 from .base import Robot, yaw_of
+from ..estimation.ground import SKID_STEER_ODOMETRY
 from .diff_drive import DiffDriveLimits
+from .encoders import JointEncoders
 from .wheeled import WheeledRobot
 
 if TYPE_CHECKING:
@@ -75,7 +77,7 @@ MMS_LIMITS = DiffDriveLimits(max_speed=1.0, max_omega=1.0, max_accel=0.5, max_al
 CAMERA_INTRINSICS = Intrinsics(320, 240, 58.0, near=0.1, far=10.0)
 """Eye-in-hand RGB-D camera (the paper names none): a RealSense-class 58° vertical field
 of view and 0.1 m minimum depth, at 320×240 to keep rendering cheap."""
-CAMERA_CONFIG = SensorConfig(rate_hz=15.0, noise_std=2.0)  # RGB noise in 0-255 intensity
+CAMERA_CONFIG = SensorConfig(rate_hz=15.0, noise_std=2.0, latency_s=0.05)  # RGB noise 0-255; latency chosen
 CAMERA_DEPTH_NOISE_PER_M = 0.002  # depth noise std per metre of depth (≈0.2 %)
 
 ARM_READY = (0.0, -0.3, 2.2, 0.0, 1.2, 0.0)
@@ -279,17 +281,20 @@ class MMS(WheeledRobot):
     urdf = "mms.urdf"
     default_limits = MMS_LIMITS
 
+    odometry_errors = SKID_STEER_ODOMETRY
+
     def __init__(
         self,
         world: World,
         name: str,
         pose: Sequence[float] = (0.0, 0.0, 0.0),
         limits: DiffDriveLimits | Mapping[str, float] | None = None,
+        localization: str = "odometry",
         mavs: bool = True,
         arm_q: Sequence[float] = ARM_READY,
         camera: Mapping[str, Any] | None = None,
     ):
-        super().__init__(world, name, pose=pose, limits=limits)
+        super().__init__(world, name, pose=pose, limits=limits, localization=localization)
         cid, body = self.cid, self.body_id
         joints = [self.link_index(link) for link in ARM_LINKS]  # a link's index is its parent joint's
         infos = [pybullet.getJointInfo(body, j, physicsClientId=cid) for j in joints]
@@ -302,6 +307,7 @@ class MMS(WheeledRobot):
             max_torque=[info[10] for info in infos],
         )
         self.arm.reset(arm_q)
+        self.encoders = JointEncoders(world, f"{name}/arm")
         self.fingers = [self.link_index(link) for link in FINGER_LINKS]
         self.finger_travel = float(pybullet.getJointInfo(body, self.fingers[0], physicsClientId=cid)[9])
         self.gripper_link = self.link_index("gripper_base")
@@ -353,6 +359,10 @@ class MMS(WheeledRobot):
     def arm_positions(self) -> np.ndarray:
         """Arm joint angles now (rad), ``arm_joint_1`` … ``arm_joint_6``."""
         return self.arm.positions()
+
+    def arm_encoders(self) -> np.ndarray:
+        """Arm joint angles as the joint encoders read them (rad; 12-bit encoders, :mod:`.encoders`)."""
+        return self.encoders.read(self.arm.positions())
 
     def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """World pose of the tool centre point (between the finger tips)."""
@@ -433,7 +443,8 @@ class MMS(WheeledRobot):
         self.arm.pre_physics(dt)
 
     def post_physics(self, dt: float) -> None:
-        """Carry the latched apparatuses (and their MAVs) with their holsters."""
+        """Advance the odometry; carry the latched apparatuses (and their MAVs) with their holsters."""
+        super().post_physics(dt)
         p, q = pybullet.getBasePositionAndOrientation(self.body_id, physicsClientId=self.cid)
         v, w = pybullet.getBaseVelocity(self.body_id, physicsClientId=self.cid)
         for holster in self.holsters.values():

@@ -44,6 +44,7 @@ from ..sensors.lidar import Lidar, LidarSpec
 from .arm import RPM, ArmController
 from .diff_drive import DiffDriveLimits
 from .docking_device import DockingDevice
+from .encoders import JointEncoders
 from .wheeled import WheeledRobot
 
 if TYPE_CHECKING:
@@ -86,16 +87,22 @@ ARM_POSES: dict[str, tuple[float, ...]] = {
 _EYE_IN_HAND = {
     # PS Eye (§V-B): 640×480 at 60 Hz; its wide lens setting (75° horizontal) gives 60° vertically at 4:3
     "rate_hz": 60.0, "width": 640, "height": 480, "fov_v_deg": 60.0, "near": 0.02, "far": 10.0,
+    # USB webcam: pixel noise (0-255), 1 % lost frames, 50 ms capture latency (chosen, see docs/world.md)
+    "noise_std": 2.0, "dropout": 0.01, "latency_s": 0.05,
 }
 _FRONT_RGBD = {
     # RealSense D435 (§V-B): depth FOV 87°×58°, 0.1–10 m; 640×480 natively, 320×240 by default for speed
     "rate_hz": 30.0, "width": 320, "height": 240, "fov_v_deg": 58.0, "near": 0.1, "far": 10.0,
     "depth_noise_per_m": 0.02,  # 1σ depth error per metre of depth: RMS error ≤ 2 % at 2 m (D435 data sheet)
+    "noise_std": 2.0, "latency_s": 0.05,  # chosen, see docs/world.md
 }
 _LIDAR = {
     # Sick LMS111-10100 (§V-B): 270°, 0.5° at 50 Hz, 20 m, 12 mm statistical error (1σ)
     "rate_hz": 50.0, "noise_std": 0.012,
+    "beam_dropout": 0.002,  # lost echoes (dark, glossy or grazing surfaces; chosen)
 }
+DEPTH_CAMERAS = frozenset({"front_rgbd"})
+"""Cameras whose depth image the carrier's computer receives (the PS Eye is a plain RGB webcam)."""
 
 
 def _split_settings(
@@ -153,6 +160,7 @@ class MobileManipulator(WheeledRobot):
             ``rate_hz, noise_std, dropout, latency_s, fov_deg, resolution_deg,
             max_range, start_range, beam_dropout``.
         docking: keyword overrides of :class:`DockingDevice` (e.g. ``{"capture_distance": 0.02}``).
+        localization: ``"odometry"`` or ``"map"`` (see :class:`WheeledRobot`).
 
     Attributes:
         arm: the joint PID controller (:class:`ArmController`).
@@ -173,6 +181,7 @@ class MobileManipulator(WheeledRobot):
         name: str,
         pose: Sequence[float] = (0.0, 0.0, 0.0),
         limits: DiffDriveLimits | Mapping[str, float] | None = None,
+        localization: str = "odometry",
         arm_pose: str | Sequence[float] = "stowed",
         sensors: Mapping[str, Mapping[str, Any]] | None = None,
         docking: Mapping[str, Any] | None = None,
@@ -180,7 +189,7 @@ class MobileManipulator(WheeledRobot):
         sensor_specs = _sensor_specs(self.kind, sensors or {})  # bad settings fail before anything is built
         docking_settings = _docking_settings(docking or {})
         initial_q = self._configuration(arm_pose)
-        super().__init__(world, name, pose=pose, limits=limits)
+        super().__init__(world, name, pose=pose, limits=limits, localization=localization)
         cid = self.cid
         joints = {}
         for j in range(pybullet.getNumJoints(self.body_id, physicsClientId=cid)):
@@ -200,6 +209,7 @@ class MobileManipulator(WheeledRobot):
         )
         self.arm_kinematics = ArmKinematics.from_urdf(self.urdf, ARM_BASE_LINK, PART_A_LINK)
         self.reset_arm(initial_q)
+        self.encoders = JointEncoders(world, f"{name}/arm")
         self.docking = DockingDevice(self, PART_A_LINK, **docking_settings)
         self._add_sensors(sensor_specs)
 
@@ -207,7 +217,10 @@ class MobileManipulator(WheeledRobot):
         def camera(name: str) -> Camera:
             config, intrinsics, extra = specs[name]
             link = SENSOR_LINKS[name]
-            return Camera(self, name, intrinsics, config, link=link, R_link_optical=np.eye(3), **extra)
+            return Camera(
+                self, name, intrinsics, config, link=link, R_link_optical=np.eye(3),
+                measures_depth=name in DEPTH_CAMERAS, **extra,
+            )
 
         config, spec, _ = specs["lidar"]
         self.eye_in_hand: Camera = self.add_sensor(camera("eye_in_hand"))  # type: ignore[assignment]
@@ -265,8 +278,8 @@ class MobileManipulator(WheeledRobot):
 
     @simulates_hardware
     def arm_encoders(self) -> np.ndarray:
-        """Arm joint angles as the joint encoders read them (rad). PROVISIONAL: exact until the encoder model lands."""
-        return self.arm.positions()
+        """Arm joint angles as the joint encoders read them (rad; Dynamixel 12-bit, :mod:`.encoders`)."""
+        return self.encoders.read(self.arm.positions())
 
     def joint_velocities(self) -> np.ndarray:
         """Arm joint speeds now (rad/s)."""

@@ -30,6 +30,7 @@ import numpy as np
 import pybullet
 
 from ..onboard import PlatformOnboard
+from ..estimation.ground import SKID_STEER_ODOMETRY
 from .diff_drive import DiffDriveLimits
 from .wheeled import WheeledRobot
 
@@ -60,6 +61,7 @@ class SummitXL(WheeledRobot):
     Args:
         pose: ``[x, y]``, ``[x, y, yaw]`` or ``[x, y, z, yaw]`` of the footprint (world frame, m, rad).
         limits: drive limits replacing :data:`SUMMIT_XL_LIMITS`, whole or by field.
+        localization: ``"odometry"`` (skid-steer figures, :data:`SKID_STEER_ODOMETRY`) or ``"map"``.
 
     Attributes:
         platform_size: ``(side_x, side_y)`` of the landing platform (m), read from the URDF.
@@ -69,6 +71,7 @@ class SummitXL(WheeledRobot):
     onboard_class = PlatformOnboard
     urdf = "summit_xl.urdf"
     default_limits = SUMMIT_XL_LIMITS
+    odometry_errors = SKID_STEER_ODOMETRY
 
     def __init__(
         self,
@@ -76,8 +79,9 @@ class SummitXL(WheeledRobot):
         name: str,
         pose: Sequence[float] = (0.0, 0.0, 0.0),
         limits: DiffDriveLimits | Mapping[str, float] | None = None,
+        localization: str = "odometry",
     ):
-        super().__init__(world, name, pose=pose, limits=limits)
+        super().__init__(world, name, pose=pose, limits=limits, localization=localization)
         self.platform_link = self.link_index("landing_platform")
         (shape,) = pybullet.getCollisionShapeData(self.body_id, self.platform_link, physicsClientId=self.cid)
         self.platform_size: tuple[float, float] = (float(shape[3][0]), float(shape[3][1]))

@@ -57,7 +57,8 @@ if TYPE_CHECKING:
 ENTRANCE_WIDTH_M = 0.19  # b_e, Table 1 (the slot of mother_ugv.urdf)
 CAMERA_RESOLUTION = (640, 480)  # W × H, Table 1
 CAMERA_FOV_V_DEG = 61.0  # θ_f, Table 1 (vertical, see module docstring)
-CAMERA_CONFIG = SensorConfig(rate_hz=10.0)  # embedded CMOS camera; rate not given
+# embedded CMOS camera (rate not given): pixel noise, 1 % lost frames, 0.1 s latency (chosen, docs/world.md)
+CAMERA_CONFIG = SensorConfig(rate_hz=10.0, noise_std=3.0, dropout=0.01, latency_s=0.1)
 LIFT_TRAVEL_M = 0.30  # platform travel from the floor to the storage capsule (not given)
 LIFT_SPEED_MPS = 0.05  # m/s (not given)
 LIFT_FORCE_N = 300.0  # lift motor force limit (N)
@@ -98,10 +99,11 @@ class ChildUGV(WheeledRobot):
         name: str,
         pose: Sequence[float] = (0.0, 0.0, 0.0),
         limits: DiffDriveLimits | Mapping[str, float] | None = None,
+        localization: str = "odometry",
         camera_resolution: Sequence[int] = CAMERA_RESOLUTION,
         camera: Mapping[str, Any] | None = None,
     ):
-        super().__init__(world, name, pose=pose, limits=limits)
+        super().__init__(world, name, pose=pose, limits=limits, localization=localization)
         (shape,) = pybullet.getCollisionShapeData(self.body_id, -1, physicsClientId=self.cid)
         self.size: tuple[float, float] = (float(shape[3][0]), float(shape[3][1]))
         self.carrier: MotherUGV | None = None
@@ -114,6 +116,7 @@ class ChildUGV(WheeledRobot):
                 CAMERA_CONFIG.with_overrides(camera),
                 link="camera_link",
                 R_link_optical=OPTICAL_FORWARD,
+                measures_depth=False,
             )
         )
 
@@ -183,8 +186,9 @@ class MotherUGV(WheeledRobot):
         name: str,
         pose: Sequence[float] = (0.0, 0.0, 0.0),
         limits: DiffDriveLimits | Mapping[str, float] | None = None,
+        localization: str = "odometry",
     ):
-        super().__init__(world, name, pose=pose, limits=limits)
+        super().__init__(world, name, pose=pose, limits=limits, localization=localization)
         self.entrance_width = ENTRANCE_WIDTH_M
         self.lift_travel = LIFT_TRAVEL_M
         self.lift_joint = self.link_index("lift_platform")  # a link's index is its parent joint's

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet
 
+from ..estimation.ground import LOCALIZATIONS, MapErrors, MapLocalization, OdometryErrors, WheelOdometry
 from ..onboard import WheeledOnboard, simulates_hardware
 from .base import Robot, pose_from_list, yaw_of
 from .diff_drive import DiffDrive, DiffDriveLimits
@@ -50,6 +51,13 @@ class WheeledRobot(Robot):
             in the world frame (m, rad); z defaults to the floor height.
         limits: drive limits replacing :attr:`default_limits`, whole or by field
             (e.g. ``{"noise_std": 0.0}``).
+        localization: ``"odometry"`` (default: :class:`WheelOdometry`, frame ``odom``,
+            drifts with distance) or ``"map"`` (:class:`MapLocalization` against the
+            mission's declared map, frame ``map``, bounded error).
+
+    Attributes:
+        odometry: the :class:`WheelOdometry` (also behind a map localiser).
+        estimator: the onboard estimator the skills read.
     """
 
     onboard_class = WheeledOnboard
@@ -57,6 +65,10 @@ class WheeledRobot(Robot):
     urdf: str = ""
     #: drive limits of the kind (subclasses set the paper's values)
     default_limits: DiffDriveLimits = DiffDriveLimits(max_speed=1.0, max_omega=1.0)
+    #: wheel-odometry figures of the kind (differential base by default; skid-steer kinds worse)
+    odometry_errors: OdometryErrors = OdometryErrors()
+    #: map-localisation figures (AMCL-like)
+    map_errors: MapErrors = MapErrors()
 
     def __init__(
         self,
@@ -64,7 +76,10 @@ class WheeledRobot(Robot):
         name: str,
         pose: Sequence[float] = (0.0, 0.0, 0.0),
         limits: DiffDriveLimits | Mapping[str, float] | None = None,
+        localization: str = "odometry",
     ):
+        if localization not in LOCALIZATIONS:
+            raise ValueError(f"localization must be one of {LOCALIZATIONS}, got '{localization}'")
         super().__init__(world, name)
         floor = world.scene.floor
         p_footprint, q = pose_from_list(pose, default_z=floor.height if floor is not None else 0.0)
@@ -77,6 +92,9 @@ class WheeledRobot(Robot):
         )
         self.limits = limits_with(self.default_limits, limits)
         self.diff_drive = DiffDrive(world, self.body_id, self.limits, f"{name}/drive")
+        p0, q0 = self.footprint_pose()  # the start pose the mission declares
+        self.odometry = WheelOdometry(self, p0, yaw_of(q0), self.odometry_errors)
+        self.estimator = self.odometry if localization == "odometry" else MapLocalization(self, self.odometry, self.map_errors)
 
     # ------------------------------------------------------------ commands
     def drive(self, v: float, omega: float) -> None:
@@ -100,8 +118,12 @@ class WheeledRobot(Robot):
 
     @simulates_hardware
     def wheel_speed(self) -> float:
-        """Forward speed (m/s) as the wheel encoders measure it. PROVISIONAL: exact until the odometry model lands."""
-        return self.speed()
+        """Forward speed (m/s) as the wheel encoders measure it (last odometry sample)."""
+        return self.odometry.speed
+
+    def true_yaw_rate(self) -> float:
+        """True yaw rate of the base (rad/s; the odometry's gyro input, world side)."""
+        return float(pybullet.getBaseVelocity(self.body_id, physicsClientId=self.cid)[1][2])
 
     def footprint_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """World pose of ``base_footprint`` (the base projected on the ground)."""
@@ -123,3 +145,7 @@ class WheeledRobot(Robot):
     def pre_physics(self, dt: float) -> None:
         """Advance the drive reference by one physics step."""
         self.diff_drive.pre_physics(dt)
+
+    def post_physics(self, dt: float) -> None:
+        """Advance the onboard estimator by one physics step."""
+        self.estimator.update(dt)

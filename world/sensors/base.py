@@ -55,6 +55,21 @@ class SensorConfig:
             )
         return SensorConfig(**{**self.__dict__, **overrides})
 
+    def scaled(self, noise_scale: float) -> SensorConfig:
+        """A copy with noise, dropout (capped at 1) and latency multiplied by ``noise_scale`` (the rate is kept).
+
+        The world applies it to every sensor after the mission's overrides
+        (:meth:`with_overrides`), so an override states the unscaled figure.
+        """
+        if noise_scale == 1.0:
+            return self
+        return SensorConfig(
+            rate_hz=self.rate_hz,
+            noise_std=self.noise_std * noise_scale,
+            dropout=min(1.0, self.dropout * noise_scale),
+            latency_s=self.latency_s * noise_scale,
+        )
+
 
 @dataclass(frozen=True)
 class Reading(Generic[T]):
@@ -68,16 +83,24 @@ class Sensor(Generic[T]):
     """Base of every sensor. Subclasses implement :meth:`measure` (noise-free or noisy).
 
     ``self.rng`` is the sensor's own stream from the world seed; use it for
-    every random draw so runs stay reproducible.
+    every random draw so runs stay reproducible. ``config`` is the sensor's
+    nominal figure (datasheet value plus the mission's overrides);
+    ``self.config`` is that figure scaled by ``world.noise_scale``
+    (:meth:`SensorConfig.scaled`), and ``self.noise_scale`` is the factor a
+    subclass applies to its own error figures (biases, drifts, quantisation).
     """
 
     def __init__(self, world: World, name: str, config: SensorConfig):
         self.world = world
         self.name = name
-        self.config = config
+        self.nominal = config
+        self.noise_scale = world.noise_scale
+        self.config = config.scaled(world.noise_scale)
         self.rng = world.rng_for(f"sensor/{name}")
         self.enabled = True
         self._period_steps = max(1, world.clock.steps_for(1.0 / config.rate_hz))
+        #: actual sampling period (s): whole physics steps
+        self.period = self._period_steps * world.clock.dt
         self._next_due_step = 0
         self._pending: deque[Reading[T]] = deque()
         self._latest: Reading[T] | None = None

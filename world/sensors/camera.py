@@ -15,6 +15,16 @@ Everything after the render works in place on pybullet's own arrays in
 float32: the floor is computed only inside the image rectangle where it can
 appear (nothing when it is out of view), its colour is written as one packed
 32-bit RGBA value per pixel, and RGBA → RGB is a single OpenCV conversion.
+
+Image realism (every figure scaled by ``world.noise_scale``; values and
+sources in ``docs/world.md``): a per-run white balance (one gain per colour
+channel, 1σ ``white_balance_std``), a per-frame exposure gain (1σ
+``exposure_std``), additive pixel noise (1σ ``config.noise_std`` in 0-255
+intensity), and depth noise growing with depth (``depth_noise_per_m``);
+frame drops and latency come from :class:`SensorConfig`. The gains are one
+saturating OpenCV ``transform`` and the pixel noise one saturating ``add``
+of a slice of a pre-drawn noise bank at a seeded random offset (a fresh
+full-frame draw would cost ten times more), both in place.
 """
 
 from __future__ import annotations
@@ -98,12 +108,21 @@ class CameraFrame:
     rotation: np.ndarray
 
 
+NOISE_BANK_SLACK = 65536  # extra noise samples beyond one frame: the range of the random offsets
+EXPOSURE_STD = 0.03  # 1σ per-frame exposure gain (chosen: auto-exposure flicker of a few %)
+WHITE_BALANCE_STD = 0.03  # 1σ per-run gain of each colour channel (chosen: auto white balance spread)
+
+
 class Camera(Sensor[CameraFrame]):
     """A camera on ``robot``'s ``link`` at ``offset`` (m, link frame) with ``R_link_optical``.
 
     ``segmentation=True`` also returns the body-id mask (slightly slower).
-    ``config.noise_std`` adds Gaussian noise to RGB intensities (0-255) and,
-    scaled by ``depth_noise_per_m`` × depth, to depth.
+    ``config.noise_std`` adds Gaussian noise to RGB intensities (0-255),
+    ``depth_noise_per_m`` × depth to depth; ``exposure_std`` and
+    ``white_balance_std`` are the per-frame and per-run gain errors (module
+    docstring). ``measures_depth``: whether the robot's computer receives the
+    depth image (RGB-D cameras) or only colour (the sensor port drops the
+    rendered depth of a plain RGB camera).
     """
 
     def __init__(
@@ -117,15 +136,24 @@ class Camera(Sensor[CameraFrame]):
         R_link_optical: np.ndarray = OPTICAL_FORWARD,
         segmentation: bool = False,
         depth_noise_per_m: float = 0.0,
+        measures_depth: bool = True,
+        exposure_std: float = EXPOSURE_STD,
+        white_balance_std: float = WHITE_BALANCE_STD,
     ):
         super().__init__(robot.world, f"{robot.name}/{name}", config)
         self.robot = robot
+        self.measures_depth = bool(measures_depth)
+        k = self.noise_scale
+        self.exposure_std = exposure_std * k
+        self.white_balance = tuple(1.0 + white_balance_std * k * float(g) for g in self.rng.standard_normal(3))
+        self._pixel_bank: np.ndarray | None = None  # drawn on the first noisy frame
+        self._depth_bank: np.ndarray | None = None
         self.intrinsics = intrinsics
         self.link = robot.link_index(link) if isinstance(link, str) else link
         self.offset = np.asarray(offset, dtype=float)
         self.R_link_optical = np.asarray(R_link_optical, dtype=float)
         self.segmentation = segmentation
-        self.depth_noise_per_m = depth_noise_per_m
+        self.depth_noise_per_m = depth_noise_per_m * k
         self._projection = intrinsics.projection_matrix()
         K = self._K = intrinsics.K
         # x of each column's and y of each row's optical ray with z = 1, so depth == ray parameter
@@ -233,15 +261,22 @@ class Camera(Sensor[CameraFrame]):
             np.copyto(segmentation[rows, cols], floor.body_id, where=hit)
 
     def _add_noise(self, rgb: np.ndarray, depth: np.ndarray) -> None:
-        std = self.config.noise_std
-        if std > 0:
-            noisy = self.rng.standard_normal(rgb.shape, dtype=np.float32)
-            noisy *= std
-            noisy += rgb
-            np.clip(noisy, 0, 255, out=noisy)
-            np.copyto(rgb, noisy, casting="unsafe")  # truncates like astype(uint8)
+        """Gains (white balance × exposure), pixel noise and depth noise, in place and saturating."""
+        gain = 1.0 + self.exposure_std * float(self.rng.standard_normal()) if self.exposure_std > 0 else 1.0
+        gains = [g * gain for g in self.white_balance]
+        if gains != [1.0, 1.0, 1.0]:
+            cv2.transform(rgb, np.diag(gains).astype(np.float32), dst=rgb)
+        if self.config.noise_std > 0:
+            if self._pixel_bank is None:
+                bank = self.rng.standard_normal(rgb.size + NOISE_BANK_SLACK, dtype=np.float32)
+                bank *= self.config.noise_std
+                self._pixel_bank = np.clip(np.rint(bank), -255, 255).astype(np.int16)
+            start = int(self.rng.integers(NOISE_BANK_SLACK))
+            cv2.add(rgb, self._pixel_bank[start : start + rgb.size].reshape(rgb.shape), dst=rgb, dtype=cv2.CV_8U)
         if self.depth_noise_per_m > 0:
-            noise = self.rng.standard_normal(depth.shape, dtype=np.float32)
-            noise *= self.depth_noise_per_m
+            if self._depth_bank is None:
+                self._depth_bank = self.rng.standard_normal(depth.size + NOISE_BANK_SLACK, dtype=np.float32)
+            start = int(self.rng.integers(NOISE_BANK_SLACK))
+            noise = self._depth_bank[start : start + depth.size].reshape(depth.shape) * np.float32(self.depth_noise_per_m)
             noise *= depth
             depth += noise

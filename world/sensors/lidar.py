@@ -104,7 +104,8 @@ class Lidar(Sensor[LidarScan]):
     """A 2-D LiDAR on ``robot``'s ``link`` at ``offset`` (m, link frame) with ``R_link_sensor``.
 
     The scan plane is the sensor frame's x-y plane. ``config.noise_std`` is
-    the range noise (m, 1σ; the LMS111 data sheet gives 12 mm).
+    the range noise (m, 1σ; the LMS111 data sheet gives 12 mm); the spec's
+    ``beam_dropout`` is scaled by ``world.noise_scale`` (capped at 1) like it.
     """
 
     def __init__(
@@ -120,6 +121,7 @@ class Lidar(Sensor[LidarScan]):
         super().__init__(robot.world, f"{robot.name}/{name}", config)
         self.robot = robot
         self.spec = spec
+        self.beam_dropout = min(1.0, spec.beam_dropout * self.noise_scale)
         self.link = robot.link_index(link) if isinstance(link, str) else link
         self.offset = np.asarray(offset, dtype=float)
         self.R_link_sensor = np.asarray(R_link_sensor, dtype=float)
@@ -147,8 +149,8 @@ class Lidar(Sensor[LidarScan]):
         rng, n = self.rng, len(ranges)
         if self.config.noise_std > 0:
             ranges += rng.normal(0.0, self.config.noise_std, n)
-        if spec.beam_dropout > 0:
-            lost = rng.random(n) < spec.beam_dropout
+        if self.beam_dropout > 0:
+            lost = rng.random(n) < self.beam_dropout
             ranges[lost] = np.inf
             bodies[lost] = -1
         ranges[ranges > spec.max_range] = np.inf

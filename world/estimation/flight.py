@@ -1,0 +1,239 @@
+"""Onboard flight estimator of the quadrotors: IMU + optical flow + sonar + barometer, dead-reckoned.
+
+What the Bebop 2, AR.Drone 2 and Tello firmwares do, reduced to a cheap
+complementary filter (plain ``math``; it runs at the autopilot rate,
+120 Hz, and the autopilot flies on its output):
+
+- attitude: the IMU's attitude output (with its own error process,
+  :class:`~marsupial.world.sensors.imu.ImuErrors`) rotated by a heading
+  offset that puts the start (or a hand-over) heading at the declared one;
+- horizontal velocity: the accelerometer's specific force rotated into the
+  navigation frame minus gravity and a bias estimate is integrated, and each
+  optical-flow sample (velocity over the surface below, heading frame)
+  corrects it, ``v += L_v e`` and ``b -= L_b e`` with ``e = v_flow - v``
+  (a second-order complementary filter whose integral state absorbs the
+  accelerometer bias and slow attitude errors). No flow update while the
+  height is invalid (no range echo within ``height_timeout``).
+- horizontal position: the integral of the velocity estimate, so it drifts
+  (flow noise, the flow's scale error, the heading error), as the vendors'
+  own estimates do;
+- height: vertical specific force integrated and corrected by the sonar's
+  height above the expected floor (the scene floor the mission declares),
+  each echo gated: an echo more than ``sonar_gate`` off the predicted height
+  (a platform, an arm, a carrier under the vehicle) is ignored; without a
+  recent floor echo the barometer (whose drifting offset is re-calibrated
+  against the sonar while both are valid) corrects it.
+- at rest (motors off, or held by a docking device) the estimate is held:
+  zero velocity, position kept (zero-velocity update); the attitude keeps
+  following the IMU.
+
+Frame ``"odom"``: starts at the mission's spawn pose; :meth:`reset` restarts
+it (a carrier's hand-over). Units: m, m/s, rad.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..sensors.imu import quat_multiply, quat_yaw, rotation_rows
+from ..world import GRAVITY
+from .base import Estimator, StateEstimate
+
+if TYPE_CHECKING:
+    from ..sensors.barometer import Barometer
+    from ..sensors.flow import OpticalFlow
+    from ..sensors.imu import Imu
+    from ..sensors.sonar import Sonar
+    from ..world import World
+
+
+@dataclass(frozen=True)
+class FlightEstimatorGains:
+    """Gains of the complementary filter (chosen; see ``docs/world.md``).
+
+    Attributes:
+        flow_velocity: velocity correction per second by the flow innovation (1/s).
+        flow_bias: accelerometer-bias correction per second per (m/s) of innovation (1/s²).
+        sonar_omega: natural frequency of the height loop on sonar echoes (rad/s).
+        baro_omega: natural frequency of the height loop on the barometer (rad/s).
+        baro_calibration_tau: time constant (s) of the barometer offset's calibration against the sonar.
+        sonar_gate: largest accepted difference (m) between an echo's height and the predicted height.
+        height_timeout: age (s) beyond which the last valid echo no longer makes the height valid.
+    """
+
+    flow_velocity: float = 8.0
+    flow_bias: float = 0.5
+    sonar_omega: float = 3.0
+    baro_omega: float = 0.7
+    baro_calibration_tau: float = 20.0
+    sonar_gate: float = 0.25
+    height_timeout: float = 0.2
+
+
+class FlightEstimator(Estimator):
+    """IMU + optical flow + sonar + barometer estimate of a quadrotor's base (see the module docstring).
+
+    Args:
+        world: the world (for the simulated clock only).
+        imu, flow, sonar, barometer: the vehicle's sensors.
+        floor_height: height (m) of the floor the mission declares (world z).
+        sonar_offset_z: z (m) of the sonar's origin in the base frame (negative: below the base).
+        position, yaw: start pose (m, rad) in the navigation frame.
+
+    Attributes (read by the autopilot every update, plain floats):
+        p, v: position (m) and velocity (m/s) in the navigation frame.
+        yaw: heading (rad); R: row-major ``R_nav_body``; resets: number of :meth:`reset` calls.
+        height_valid: True while a recent range echo exists (flow updates only then).
+    """
+
+    frame = "odom"
+    source = "imu+flow+sonar+baro"
+
+    def __init__(
+        self,
+        world: World,
+        imu: Imu,
+        flow: OpticalFlow,
+        sonar: Sonar,
+        barometer: Barometer,
+        floor_height: float,
+        sonar_offset_z: float,
+        position: tuple[float, float, float],
+        yaw: float,
+        gains: FlightEstimatorGains = FlightEstimatorGains(),
+    ):
+        self.clock = world.clock
+        self.imu, self.flow, self.sonar, self.barometer = imu, flow, sonar, barometer
+        self.floor_height = float(floor_height)
+        self.sonar_offset_z = float(sonar_offset_z)
+        self.gains = gains
+        self.p = [0.0, 0.0, 0.0]
+        self.v = [0.0, 0.0, 0.0]
+        self.bias = [0.0, 0.0]  # m/s², horizontal accelerometer bias estimate (navigation frame)
+        self.resets = 0
+        self.height_valid = False
+        self._t_echo = -math.inf
+        self._t_floor_echo = -math.inf
+        self._last = {"flow": -1.0, "sonar": -1.0, "baro": -1.0}
+        self._baro_offset: float | None = None  # m, navigation z minus barometer reading
+        self._w = (0.0, 0.0, 0.0)
+        self._q_imu = self._q = (0.0, 0.0, 0.0, 1.0)
+        self._cache: StateEstimate | None = None
+        self._f, self._w, self._q_imu = self.imu.sample()
+        self.reset(np.asarray(position, dtype=float), float(yaw))
+        self.resets = 0
+
+    # ------------------------------------------------------------- interface
+    def reset(self, position: np.ndarray, yaw: float) -> None:
+        """Restart at ``position`` (m) with heading ``yaw`` (rad), at rest; the barometer is re-calibrated."""
+        self.p = [float(position[0]), float(position[1]), float(position[2])]
+        self.v = [0.0, 0.0, 0.0]
+        offset = float(yaw) - quat_yaw(self._q_imu)
+        self._q_off = (0.0, 0.0, math.sin(offset / 2.0), math.cos(offset / 2.0))
+        self._set_attitude(self._q_imu)
+        self._baro_offset = None
+        self.resets += 1
+        self._cache = None
+
+    def estimate(self) -> StateEstimate:
+        """The latest estimate (frame ``"odom"``)."""
+        if self._cache is None:
+            self._cache = StateEstimate(
+                self.clock.now, self.frame, np.array(self.p), np.array(self._q), np.array(self.v), np.array(self._w), self.source
+            )
+        return self._cache
+
+    def update(self, dt: float, at_rest: bool = False) -> None:
+        """One filter step of ``dt`` s: IMU propagation, then the flow, sonar and barometer samples that are new."""
+        self._cache = None
+        f, self._w, q_imu = self.imu.sample()
+        self._q_imu = q_imu
+        self._set_attitude(q_imu)
+        if at_rest:
+            self.v = [0.0, 0.0, 0.0]
+            self._calibrate_baro_at_rest()
+            return
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = self.R
+        fx, fy, fz = f
+        b, v, p = self.bias, self.v, self.p
+        ax = r00 * fx + r01 * fy + r02 * fz - b[0]
+        ay = r10 * fx + r11 * fy + r12 * fz - b[1]
+        az = r20 * fx + r21 * fy + r22 * fz - GRAVITY
+        v0x, v0y, v0z = v
+        v[0] += ax * dt
+        v[1] += ay * dt
+        v[2] += az * dt
+        p[0] += 0.5 * (v0x + v[0]) * dt  # trapezoidal position integration
+        p[1] += 0.5 * (v0y + v[1]) * dt
+        p[2] += 0.5 * (v0z + v[2]) * dt
+        self._correct_height(r22)
+        self._correct_flow()
+
+    # --------------------------------------------------------------- helpers
+    def _set_attitude(self, q_imu: tuple[float, float, float, float]) -> None:
+        q = self._q = quat_multiply(self._q_off, q_imu)
+        self.R = rotation_rows(q)
+        self.yaw = math.atan2(self.R[3], self.R[0])
+
+    def _new(self, key: str, sensor: Sonar | Barometer | OpticalFlow) -> object | None:
+        """The sensor's reading if it is newer than the last one this filter used, else None."""
+        reading = sensor.read()
+        if reading is None or reading.stamp <= self._last[key]:
+            return None
+        self._last[key] = reading.stamp
+        return reading.data
+
+    def _calibrate_baro_at_rest(self) -> None:
+        baro = self._new("baro", self.barometer)
+        if baro is not None:
+            self._baro_offset = self.p[2] - float(baro)  # type: ignore[arg-type]
+
+    def _correct_height(self, r22: float) -> None:
+        """Sonar echoes gated on the expected floor; the barometer when no floor echo is recent."""
+        g, now, p, v = self.gains, self.clock.now, self.p, self.v
+        echo = self._new("sonar", self.sonar)
+        if echo is not None:
+            rng = echo.range  # type: ignore[attr-defined]
+            if echo.min_range < rng < echo.max_range:  # type: ignore[attr-defined]
+                self._t_echo = now
+                tilt = math.acos(max(-1.0, min(1.0, r22)))
+                height = rng * math.cos(max(0.0, tilt - echo.half_angle)) - self.sonar_offset_z  # type: ignore[attr-defined]
+                e = self.floor_height + height - p[2]
+                if abs(e) < g.sonar_gate:
+                    period = self.sonar.period
+                    p[2] += 2.0 * g.sonar_omega * period * e
+                    v[2] += g.sonar_omega**2 * period * e
+                    self._t_floor_echo = now
+        self.height_valid = now - self._t_echo <= g.height_timeout
+        baro = self._new("baro", self.barometer)
+        if baro is None:
+            return
+        if self._baro_offset is None:
+            self._baro_offset = p[2] - float(baro)  # type: ignore[arg-type]
+            return
+        z_baro = float(baro) + self._baro_offset  # type: ignore[arg-type]
+        period = self.barometer.period
+        if now - self._t_floor_echo <= g.height_timeout:  # sonar holds the height: calibrate the barometer
+            self._baro_offset += (p[2] - z_baro) * period / g.baro_calibration_tau
+        else:
+            e = z_baro - p[2]
+            p[2] += 2.0 * g.baro_omega * period * e
+            v[2] += g.baro_omega**2 * period * e
+
+    def _correct_flow(self) -> None:
+        flow = self._new("flow", self.flow)
+        if flow is None or not self.height_valid or not flow.valid:  # type: ignore[attr-defined]
+            return
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        fx, fy = flow.vx, flow.vy  # type: ignore[attr-defined]
+        ex, ey = c * fx - s * fy - self.v[0], s * fx + c * fy - self.v[1]
+        period = self.flow.period
+        kv, kb = self.gains.flow_velocity * period, self.gains.flow_bias * period
+        self.v[0] += kv * ex
+        self.v[1] += kv * ey
+        self.bias[0] -= kb * ex
+        self.bias[1] -= kb * ey

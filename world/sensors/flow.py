@@ -1,0 +1,123 @@
+"""Downward optical-flow velocity sensor (PX4Flow-like, or a drone's vertical camera with its flow firmware).
+
+The device tracks the texture under a downward camera and scales the image
+flow by its range to the surface, so what it measures is the vehicle's
+velocity *relative to the surface under the camera*: over a moving
+platform it reads the velocity relative to the platform. It is modelled by
+one ray along the body's -z axis from the camera: the body (and link) hit,
+its pybullet velocity at the hit point, and the vehicle's velocity give the
+relative velocity, expressed in the heading frame (x forward, y left,
+horizontal: the firmware derotates the flow with the gyro and the attitude).
+
+Errors (scaled by ``world.noise_scale``; sources in ``docs/world.md``):
+white noise of 1σ ``config.noise_std + noise_per_m · range`` (m/s per axis:
+the flow in pixels shrinks with height, so its metric noise grows) and a
+per-run scale error (1σ ``scale_std``: lens and range calibration). No
+surface within ``max_range`` or nearer than ``min_range`` (out of focus):
+the sample is invalid.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import pybullet
+
+from .base import Sensor, SensorConfig
+
+if TYPE_CHECKING:
+    from ..robots.base import Robot
+
+
+@dataclass(frozen=True)
+class FlowData:
+    """One optical-flow sample.
+
+    Attributes:
+        valid: False when no surface is in range (the velocity is then 0).
+        vx, vy: velocity relative to the surface (m/s), heading frame (x forward, y left).
+        range: distance (m) to the surface along the camera axis the device scaled the flow by (``inf`` if none).
+    """
+
+    valid: bool
+    vx: float
+    vy: float
+    range: float
+
+
+class OpticalFlow(Sensor[FlowData]):
+    """Optical flow of ``robot`` (base-frame camera origin ``offset``): see the module docstring.
+
+    Args:
+        noise_per_m: growth of the velocity noise with range ((m/s)/m).
+        scale_std: 1σ per-run scale error (fraction).
+        min_range, max_range: ranges (m) within which the flow is valid.
+    """
+
+    def __init__(
+        self,
+        robot: Robot,
+        name: str,
+        config: SensorConfig,
+        noise_per_m: float,
+        scale_std: float,
+        min_range: float,
+        max_range: float,
+        offset: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    ):
+        super().__init__(robot.world, f"{robot.name}/{name}", config)
+        self.robot = robot
+        self.noise_per_m = noise_per_m * self.noise_scale
+        self.scale = 1.0 + scale_std * self.noise_scale * float(self.rng.standard_normal())
+        self.min_range = min_range
+        self.max_range = max_range
+        self.offset = tuple(float(v) for v in offset)
+
+    def measure(self) -> FlowData:
+        cid, own = self.world.client_id, self.robot.body_id
+        p, q = pybullet.getBasePositionAndOrientation(own, physicsClientId=cid)
+        x, y, z, w = q
+        # body axes in the world frame: columns of R_world_body
+        r00, r10 = 1 - 2 * (y * y + z * z), 2 * (x * y + w * z)
+        r02, r12, r22 = 2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)
+        r01, r11, r21, r20 = 2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x), 2 * (x * z - w * y)
+        ox, oy, oz = self.offset
+        origin = (
+            p[0] + r00 * ox + r01 * oy + r02 * oz,
+            p[1] + r10 * ox + r11 * oy + r12 * oz,
+            p[2] + r20 * ox + r21 * oy + r22 * oz,
+        )
+        L = self.max_range
+        end = (origin[0] - r02 * L, origin[1] - r12 * L, origin[2] - r22 * L)
+        hits = pybullet.rayTestBatch([origin], [end], physicsClientId=cid)
+        body, link, fraction, hit = hits[0][0], hits[0][1], hits[0][2], hits[0][3]
+        distance = fraction * L
+        if body < 0 or body == own or distance < self.min_range:
+            return FlowData(False, 0.0, 0.0, math.inf)
+        v = pybullet.getBaseVelocity(own, physicsClientId=cid)[0]
+        sx, sy = _surface_velocity(body, link, hit, cid)
+        dvx, dvy = v[0] - sx, v[1] - sy
+        yaw = math.atan2(r10, r00)
+        c, s = math.cos(yaw), math.sin(yaw)
+        vx, vy = self.scale * (c * dvx + s * dvy), self.scale * (-s * dvx + c * dvy)
+        std = self.config.noise_std + self.noise_per_m * distance
+        if std > 0.0:
+            n0, n1 = self.rng.standard_normal(2).tolist()
+            vx, vy = vx + std * n0, vy + std * n1
+        return FlowData(True, vx, vy, distance)
+
+
+def _surface_velocity(body: int, link: int, point: tuple[float, float, float], cid: int) -> tuple[float, float]:
+    """Horizontal world velocity (m/s) of ``point`` on ``body``'s ``link`` (rigid-body: v + ω × r)."""
+    if link < 0:
+        (vx, vy, _), (wx, wy, wz) = pybullet.getBaseVelocity(body, physicsClientId=cid)
+        if not (vx or vy or wx or wy or wz):
+            return 0.0, 0.0
+        com = pybullet.getBasePositionAndOrientation(body, physicsClientId=cid)[0]
+    else:
+        state = pybullet.getLinkState(body, link, computeLinkVelocity=1, physicsClientId=cid)
+        com, (vx, vy, _), (wx, wy, wz) = state[0], state[6], state[7]
+    rx, ry, rz = point[0] - com[0], point[1] - com[1], point[2] - com[2]
+    return vx + wy * rz - wz * ry, vy + wz * rx - wx * rz
