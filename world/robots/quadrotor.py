@@ -58,7 +58,7 @@ import pybullet
 from ..energy import Battery, BatteryGauge, BatterySpec, RotorPowerModel, hover_endurance_s
 from ..errors import UnknownNameError
 from ..estimation.flight import FlightEstimator
-from ..onboard import QuadrotorOnboard
+from ..onboard import QuadrotorOnboard, simulates_hardware
 from ..sensors.barometer import Barometer
 from ..sensors.base import SensorConfig
 from ..sensors.camera import OPTICAL_DOWN, OPTICAL_FORWARD, Camera, Intrinsics
@@ -66,7 +66,6 @@ from ..sensors.flow import OpticalFlow
 from ..sensors.imu import Imu, ImuErrors
 from ..sensors.sonar import Sonar
 from ..world import GRAVITY
-from ..onboard import QuadrotorOnboard, simulates_hardware
 from .autopilot import FRAMES, Autopilot, AutopilotGains, Drag, FlightLimits
 from .base import Robot, pose_from_list, rotation_matrix, yaw_of
 
