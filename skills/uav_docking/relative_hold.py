@@ -34,7 +34,7 @@ from pydantic import Field
 
 from marsupial.geometry import rot_z, rotation_matrix, transform
 from marsupial.trees.skill import NodeParams, Skill
-from marsupial.world.estimation import StateEstimate
+from marsupial.world.onboard import StateEstimate
 
 from .observer import EyeInHandObserver
 from .relative_pose import RelativePose, RelativeState

@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from marsupial.geometry import rot_z, rotation_matrix, transform
-from marsupial.world.estimation import StateEstimate
+from marsupial.world.onboard import StateEstimate
 
 from .selection import yaw_of_rotation
 
