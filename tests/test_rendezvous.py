@@ -80,8 +80,7 @@ def test_arm_search_finds_a_marker_out_of_the_upright_view():
         assert np.abs(q_search[[0, 4]]).max() > 0.05  # found with the camera turned away from straight up
 
 
-@pytest.mark.parametrize("source", ["estimates", "measured"])
-def test_relative_hold_keeps_the_uav_at_its_pose_in_M_while_the_carrier_drives(source):
+def test_relative_hold_keeps_the_uav_at_its_pose_in_M_while_the_carrier_drives():
     with World(seed=7) as world:
         carrier, uav, harness, rendezvous = encounter(world, [-1.0, 0.8, 1.6, 0.0])
         assert harness.run(rendezvous, 20.0) == Status.SUCCESS
@@ -89,7 +88,7 @@ def test_relative_hold_keeps_the_uav_at_its_pose_in_M_while_the_carrier_drives(s
         # (during docking the track skill aims it)
         carrier.set_joint_targets("docking_ready")
         carrier.drive(0.5, 0.1)  # a slow left turn
-        hold = harness.node(RelativeHold, "uav", source=source, height=0.5, seconds=10.0)
+        hold = harness.node(RelativeHold, "uav", height=0.5, seconds=10.0)
         errors = []
 
         def record():
@@ -101,8 +100,7 @@ def test_relative_hold_keeps_the_uav_at_its_pose_in_M_while_the_carrier_drives(s
         settled = t > t[-1] - 4.0
         assert error[settled].max() < 0.05  # held within 5 cm of the pose in M, the carrier turning at 0.5 m/s
         assert yaw[settled].max() < 0.05
-        if source == "measured":
-            assert harness.blackboard("uav/hold_error") < 0.05  # its own (measured) error agrees
+        assert harness.blackboard("uav/hold_error") < 0.05  # its own (estimated) error agrees
 
 
 def test_the_docking_family_composes_into_a_mission_with_consistent_blackboard_keys(tmp_path):

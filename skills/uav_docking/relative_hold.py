@@ -18,15 +18,14 @@ heading relative to M (:func:`body_velocity`): a frame the UAV knows,
 whatever the drift between its odometry frame and the carrier's navigation
 frame. ``p_uav_M`` is the UAV pose in M of :mod:`.relative_pose` (the two
 robots' estimates over the team link, re-anchored by the eye-in-hand
-measurement P_Q^M of eq. (1)); ``source: estimates`` uses the estimates
-alone, as before any frame has been measured.
+measurement P_Q^M of eq. (1)).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 from py_trees.common import Status
@@ -154,13 +153,17 @@ def target_above_part_a(carrier: Any, uav: Any, height: float, arm_pose: str, ya
 def command_hold(uav: Any, state: RelativeState, p_target_M: np.ndarray, yaw_target_M: float, frame: CarrierFrame, gains: HoldGains) -> float | None:
     """Send the hold command to ``uav`` (body frame) from the relative state; the distance (m) to the target, ``None`` without a pose.
 
-    Without a pose the UAV hovers (its autopilot holds its own estimate).
+    The estimated drift rate of the UAV's odometry (``state.drift_M``) is
+    taken off the command: the autopilot tracks the command on its own,
+    biased velocity estimate. Without a pose the UAV hovers (its autopilot
+    holds its own estimate).
     """
     if state.T_M_Q is None:
         uav.hover()
         return None
     p_uav_M, yaw_uav_M = state.T_M_Q[:3, 3], state.yaw_M
     v_M, yaw_rate = hold_command(p_uav_M, yaw_uav_M, p_target_M, yaw_target_M, frame, gains)
+    v_M = v_M - state.drift_M  # the autopilot flies its velocity estimate, biased by the drift rate
     uav.command_velocity(*body_velocity(v_M, yaw_uav_M), yaw_rate, frame="body")
     return float(np.linalg.norm(np.asarray(p_target_M) - p_uav_M))
 
@@ -177,13 +180,11 @@ def relative_pose_of(
 
 
 class RelativeHold(Skill):
-    """Hold the UAV at a pose in the carrier's manipulator frame M (above Part A), from the measured or the estimated pose."""
+    """Hold the UAV at a pose in the carrier's manipulator frame M (above Part A), on the camera-anchored estimate of P_Q^M."""
 
     class Params(NodeParams):
         carrier: str = "carrier"
         """Team member carrying the arm (a mobile_manipulator); M is its ``arm_base`` frame."""
-        source: Literal["measured", "estimates"] = "measured"
-        """``measured``: the estimates re-anchored by the eye-in-hand P_Q^M, eq. (1) (§IV-A); ``estimates``: the two robots' estimates alone."""
         height: float = Field(HOLD_HEIGHT, gt=0.0)
         """Height (m) of Part B above Part A of ``arm_pose`` (0.30 m: within the arm's upward range for contact)."""
         arm_pose: str = "docking_ready"
@@ -211,7 +212,7 @@ class RelativeHold(Skill):
                 self.carrier, self.robot, self.params.height, self.params.arm_pose, self.params.yaw_M
             )
         self.gains = HoldGains(self.params.kp, self.params.max_speed)
-        self.relative = relative_pose_of(self, self.carrier, fuse=self.params.source == "measured")
+        self.relative = relative_pose_of(self, self.carrier)
         self.until = None if self.params.seconds is None else self.now + self.params.seconds
 
     def step(self) -> Status:

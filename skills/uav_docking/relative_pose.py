@@ -83,55 +83,89 @@ class EstimateHistory:
 
 
 class RelativePoseFilter:
-    """``C``, the drift between the carrier's frame N and the UAV's frame O, re-anchored by each measurement of P_Q^M.
+    """``C``, the drift between the carrier's frame N and the UAV's frame O, and its rate, re-anchored by each P_Q^M.
 
-    Before any measurement ``C`` is the identity (both frames start at the
-    world frame the mission declares). The first measurement sets it; every
-    later one is compared with the prediction ``T_N_M⁻¹ · C · T_O_Q`` at its
-    stamp: the innovation (position in M, heading) moves the fused pose by
-    ``gain`` and ``C`` is re-derived from it. A measurement farther than
-    ``gate`` (m, or ``gate`` / 0.1 m rad in heading) from the prediction is an
-    outlier (a tag at the image border, a wrong planar-pose branch) and is
-    dropped, unless ``max_rejections`` come in a row: then the prediction
-    itself is wrong (the drift grew while the marker was hidden) and the
-    filter restarts from the measurement.
+    ``C`` is a turn about z and a translation ``t_C`` that moves at the
+    horizontal drift rate ``d`` (m/s, in N): the UAV's horizontal velocity
+    estimate is biased (its optical flow measures the velocity over the
+    surface under it, the carrier's moving deck or arm), so
+    ``T_N_Q = C(t) · T_O_Q`` with ``t_C(t) = t_C(t_k) + d · (t − t_k)``; its
+    height is anchored by the sonar and barometer, so ``d`` has no vertical
+    part (a height step is corrected by ``gain`` alone).
+    Before any measurement ``C`` is the identity and ``d`` zero (both frames
+    start at the world frame the mission declares). The first measurement
+    sets ``C``; every later one is compared with the prediction at its stamp:
+    the innovation (position in M, heading) corrects ``t_C`` by ``gain`` and
+    ``d`` by ``rate_gain`` per second since the last measurement (an α-β
+    filter), the heading by ``gain``. A measurement farther from the
+    prediction than ``gate + gate_rate · age`` (m; ``age``: s since the last
+    accepted one; heading: the same over 0.1 m) is an outlier (a tag at the
+    image border, a wrong planar-pose branch) and is dropped, unless
+    ``max_rejections`` come in a row: then the prediction itself is wrong and
+    the filter restarts from the measurement.
 
     Args:
-        gain: weight (0…1] of a new measurement; gate: outlier threshold (m);
-        max_rejections: consecutive outliers that restart the filter.
+        gain: weight (0…1] of a measurement in the pose; rate_gain: in the drift rate (0…1);
+        gate: outlier threshold (m); gate_rate: its growth with the age of the last measurement (m/s);
+        max_rejections: consecutive outliers that restart the filter; max_rate: bound of ``d`` (m/s).
     """
 
-    def __init__(self, gain: float = 0.3, gate: float = 0.03, max_rejections: int = 5):
-        if not 0.0 < gain <= 1.0 or gate <= 0.0 or max_rejections < 1:
-            raise ValueError(f"RelativePoseFilter needs 0 < gain <= 1, gate > 0, max_rejections >= 1; got {gain}, {gate}, {max_rejections}")
+    def __init__(
+        self, gain: float = 0.3, gate: float = 0.03, max_rejections: int = 5,
+        rate_gain: float = 0.15, gate_rate: float = 0.6, max_rate: float = 1.5,
+    ):
+        if not 0.0 < gain <= 1.0 or gate <= 0.0 or max_rejections < 1 or not 0.0 <= rate_gain < 1.0 or gate_rate < 0.0:
+            raise ValueError(
+                "RelativePoseFilter needs 0 < gain <= 1, gate > 0, max_rejections >= 1, 0 <= rate_gain < 1, gate_rate >= 0; "
+                f"got {gain}, {gate}, {max_rejections}, {rate_gain}, {gate_rate}"
+            )
         self.gain, self.gate, self.max_rejections = gain, gate, max_rejections
-        self.C = np.eye(4)  # T_N_O: the UAV's odometry frame in the carrier's navigation frame
+        self.rate_gain, self.gate_rate, self.max_rate = rate_gain, gate_rate, max_rate
+        self.C = np.eye(4)  # T_N_O at t_ref: the UAV's odometry frame in the carrier's navigation frame
+        self.rate = np.zeros(3)  # d: drift rate of C's translation (m/s, N)
+        self.t_ref = 0.0
         self.measured = False
         self.rejections = 0
 
-    def predict(self, T_N_M: np.ndarray, T_O_Q: np.ndarray) -> np.ndarray:
-        """P_Q^M (4×4) from the two robots' estimates and the present drift ``C``."""
+    def drift(self, t: float) -> np.ndarray:
+        """``C`` (4×4) at ``t`` (s): its translation moved on at the drift rate."""
+        C = self.C.copy()
+        C[:3, 3] += self.rate * (t - self.t_ref)
+        return C
+
+    def predict(self, T_N_M: np.ndarray, T_O_Q: np.ndarray, t: float | None = None) -> np.ndarray:
+        """P_Q^M (4×4) at ``t`` (s; ``None``: at the last measurement) from the two robots' estimates and the drift."""
         R_N_M, p_N_M = T_N_M[:3, :3], T_N_M[:3, 3]
-        T_N_Q = self.C @ T_O_Q
+        T_N_Q = (self.C if t is None else self.drift(t)) @ T_O_Q
         return transform(R_N_M.T @ (T_N_Q[:3, 3] - p_N_M), R_N_M.T @ T_N_Q[:3, :3])
 
-    def measure(self, T_M_Q: np.ndarray, T_N_M: np.ndarray, T_O_Q: np.ndarray) -> bool:
-        """Fuse a measurement of P_Q^M taken when the estimates read ``T_N_M``, ``T_O_Q``; False when it was rejected."""
-        predicted = self.predict(T_N_M, T_O_Q)
+    def measure(self, T_M_Q: np.ndarray, T_N_M: np.ndarray, T_O_Q: np.ndarray, t: float | None = None) -> bool:
+        """Fuse P_Q^M measured at ``t`` (s) when the estimates read ``T_N_M``, ``T_O_Q``; False when it was rejected."""
+        t = self.t_ref if t is None else t
+        predicted = self.predict(T_N_M, T_O_Q, t)
         dp = T_M_Q[:3, 3] - predicted[:3, 3]
         dyaw = math.remainder(yaw_of_rotation(T_M_Q[:3, :3]) - yaw_of_rotation(predicted[:3, :3]), math.tau)
-        gain = 1.0
+        age = max(t - self.t_ref, 0.0)
+        gain, rate_gain = 1.0, 0.0
         if self.measured and self.rejections < self.max_rejections:
-            if np.linalg.norm(dp) > self.gate or abs(dyaw) * 0.1 > self.gate:
+            gate = self.gate + self.gate_rate * age
+            if np.linalg.norm(dp) > gate or abs(dyaw) * 0.1 > gate:
                 self.rejections += 1
                 return False
-            gain = self.gain
+            gain, rate_gain = self.gain, self.rate_gain
         self.rejections = 0
+        dp_N = T_N_M[:3, :3] @ dp
+        if age > 1e-6 and rate_gain > 0.0:  # horizontal only: the height is anchored by the sonar and barometer
+            self.rate[:2] = self.rate[:2] + rate_gain * dp_N[:2] / max(age, 0.05)
+            speed = float(np.linalg.norm(self.rate))
+            if speed > self.max_rate:
+                self.rate *= self.max_rate / speed
         self.measured = True
-        p_fused_N = T_N_M[:3, :3] @ (predicted[:3, 3] + gain * dp) + T_N_M[:3, 3]
+        p_fused_N = T_N_M[:3, :3] @ predicted[:3, 3] + T_N_M[:3, 3] + gain * dp_N
         R_C = rot_z(gain * dyaw) @ self.C[:3, :3]  # turning C about z turns the predicted heading in M as much
         R_C = rot_z(yaw_of_rotation(R_C))  # C stays a turn about z: roll and pitch are the UAV's IMU's
         self.C = transform(p_fused_N - R_C @ T_O_Q[:3, 3], R_C)
+        self.t_ref = t
         return True
 
 
@@ -143,6 +177,8 @@ class RelativeState:
         t: time (s) of this state.
         T_M_Q: P_Q^M (4×4), ``None`` until both robots' estimates are known.
         v_M: the UAV's velocity relative to frame M, in M's axes (m/s).
+        drift_M: the drift rate of the UAV's odometry against the carrier's frame, in M's axes (m/s):
+            what the UAV's velocity estimate lacks, added to its commands (:func:`~.relative_hold.command_hold`).
         uav_speed: the UAV's ground speed (m/s), from its estimate.
         measured: True once a camera frame anchored the estimate.
         seen_at: stamp (s) of the last frame fused (−inf: none).
@@ -151,6 +187,7 @@ class RelativeState:
     t: float
     T_M_Q: np.ndarray | None = field(default=None, repr=False)
     v_M: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    drift_M: np.ndarray = field(default_factory=lambda: np.zeros(3))
     uav_speed: float = 0.0
     measured: bool = False
     seen_at: float = -math.inf
@@ -202,17 +239,22 @@ class RelativePose:
         if observation is not None and observation.seen and observation.stamp > self.fused_stamp:
             self.fused_stamp = observation.stamp
             T_N_M, T_O_Q = self.T_N_M(observation.stamp), self.uav_history.at(observation.stamp)
-            if T_N_M is not None and T_O_Q is not None and self.filter.measure(observation.pose.T_M_Q, T_N_M, T_O_Q):
+            if T_N_M is not None and T_O_Q is not None and self.filter.measure(
+                observation.pose.T_M_Q, T_N_M, T_O_Q, observation.stamp
+            ):
                 self.seen_at = observation.stamp
         T_N_M, T_O_Q = self.T_N_M(now), self.uav_history.at(now)
         if T_N_M is None or T_O_Q is None:
             return RelativeState(now, seen_at=self.seen_at)
-        T_M_Q = self.filter.predict(T_N_M, T_O_Q)
+        T_M_Q = self.filter.predict(T_N_M, T_O_Q, now)
         uav, carrier = self.uav_history.latest, self.carrier_history.latest
-        v_uav_N = self.filter.C[:3, :3] @ np.asarray(uav.velocity)
+        drift_N = self.filter.rate
+        v_uav_N = self.filter.C[:3, :3] @ np.asarray(uav.velocity) + drift_N
         R_N_base = rotation_matrix(carrier.orientation)
         w_N = R_N_base @ np.asarray(carrier.angular_velocity)
         p_uav_N = (T_N_M @ np.append(T_M_Q[:3, 3], 1.0))[:3]
         v_frame_N = np.asarray(carrier.velocity) + np.cross(w_N, p_uav_N - carrier.position)  # M's point under the UAV
         v_M = T_N_M[:3, :3].T @ (v_uav_N - v_frame_N)
-        return RelativeState(now, T_M_Q, v_M, float(np.linalg.norm(uav.velocity)), self.filter.measured, self.seen_at)
+        drift_M = T_N_M[:3, :3].T @ drift_N
+        speed = float(np.linalg.norm(v_uav_N))
+        return RelativeState(now, T_M_Q, v_M, drift_M, speed, self.filter.measured, self.seen_at)
