@@ -86,11 +86,12 @@ def test_contact_follows_the_log_law_of_eq_15(docking):
     z0 = z_C[0]
     np.testing.assert_allclose(z_C, z0 + K_C * np.log(t_values + 1.0), atol=1e-9)  # z_C = z + k_c ln(t_c + 1)
     assert contact_height(z0, 6.0) - z0 == pytest.approx(K_C * math.log(7.0))
-    # the arm follows: Part A's height in M (forward kinematics) trails z_C by the PIDs' lag only
+    # the arm follows: Part A's height in M (forward kinematics of the encoders) trails z_C by the PIDs' lag and
+    # the UAV's own height wander (its autopilot holds a barometer height over the carrier: a few cm)
     t_A, z_A = log.metric("part_a_M", robot="uav", axis="z")
     approach = (t_c > t_c[0] + 0.5) & (t_values < 4.0)
     lag = np.abs(np.interp(t_c[approach], t_A, z_A) - z_C[approach])
-    assert lag.max() < 0.06 and np.mean(lag) < 0.03
+    assert lag.max() < 0.08 and np.mean(lag) < 0.03
     rise = np.interp(t_c[-1], t_A, z_A) - np.interp(t_c[0], t_A, z_A)
     assert rise > 0.25  # Part A rose the whole gap to Part B
 

@@ -56,7 +56,7 @@ def test_rendezvous_ends_with_the_marker_detected_stably(tmp_path):
         assert harness.run(rendezvous, 20.0) == Status.SUCCESS
         observation = harness.blackboard("carrier/uav_pose_M")
         p_true_M, _ = uav_in_M(uav, carrier)
-        assert observation.seen and world.now - observation.stamp < 0.1
+        assert observation.seen and world.now - observation.stamp <= 0.2  # the camera's latency and frame period
         assert np.linalg.norm(observation.pose.p_uav_M - p_true_M) < 0.03  # measured by eq. (1)
         assert harness.blackboard("carrier/docking") is True  # the carrier stays slow for tracking
         p_meet_M = target_above_part_a(carrier, uav, 0.8, "docking_ready")

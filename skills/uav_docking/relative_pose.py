@@ -107,12 +107,13 @@ class RelativePoseFilter:
     Args:
         gain: weight (0…1] of a measurement in the pose; rate_gain: in the drift rate (0…1);
         gate: outlier threshold (m); gate_rate: its growth with the age of the last measurement (m/s);
-        max_rejections: consecutive outliers that restart the filter; max_rate: bound of ``d`` (m/s).
+        max_rejections: consecutive outliers that restart the filter; max_rate: bound of ``d`` (m/s);
+        rate_horizon: how long (s) after the last measurement ``d`` is trusted (the surface under the UAV changes).
     """
 
     def __init__(
         self, gain: float = 0.3, gate: float = 0.03, max_rejections: int = 5,
-        rate_gain: float = 0.15, gate_rate: float = 0.6, max_rate: float = 1.5,
+        rate_gain: float = 0.15, gate_rate: float = 0.6, max_rate: float = 1.5, rate_horizon: float = 1.0,
     ):
         if not 0.0 < gain <= 1.0 or gate <= 0.0 or max_rejections < 1 or not 0.0 <= rate_gain < 1.0 or gate_rate < 0.0:
             raise ValueError(
@@ -120,17 +121,21 @@ class RelativePoseFilter:
                 f"got {gain}, {gate}, {max_rejections}, {rate_gain}, {gate_rate}"
             )
         self.gain, self.gate, self.max_rejections = gain, gate, max_rejections
-        self.rate_gain, self.gate_rate, self.max_rate = rate_gain, gate_rate, max_rate
+        self.rate_gain, self.gate_rate, self.max_rate, self.rate_horizon = rate_gain, gate_rate, max_rate, rate_horizon
         self.C = np.eye(4)  # T_N_O at t_ref: the UAV's odometry frame in the carrier's navigation frame
         self.rate = np.zeros(3)  # d: drift rate of C's translation (m/s, N)
         self.t_ref = 0.0
         self.measured = False
         self.rejections = 0
 
+    def rate_at(self, t: float) -> np.ndarray:
+        """The drift rate (m/s, N) at ``t``: zero once the last measurement is older than ``rate_horizon`` (no longer known)."""
+        return self.rate if t - self.t_ref <= self.rate_horizon else np.zeros(3)
+
     def drift(self, t: float) -> np.ndarray:
-        """``C`` (4×4) at ``t`` (s): its translation moved on at the drift rate."""
+        """``C`` (4×4) at ``t`` (s): its translation moved on at the drift rate, for at most ``rate_horizon`` s."""
         C = self.C.copy()
-        C[:3, 3] += self.rate * (t - self.t_ref)
+        C[:3, 3] += self.rate * min(max(t - self.t_ref, 0.0), self.rate_horizon)
         return C
 
     def predict(self, T_N_M: np.ndarray, T_O_Q: np.ndarray, t: float | None = None) -> np.ndarray:
@@ -248,7 +253,7 @@ class RelativePose:
             return RelativeState(now, seen_at=self.seen_at)
         T_M_Q = self.filter.predict(T_N_M, T_O_Q, now)
         uav, carrier = self.uav_history.latest, self.carrier_history.latest
-        drift_N = self.filter.rate
+        drift_N = self.filter.rate_at(now)
         v_uav_N = self.filter.C[:3, :3] @ np.asarray(uav.velocity) + drift_N
         R_N_base = rotation_matrix(carrier.orientation)
         w_N = R_N_base @ np.asarray(carrier.angular_velocity)

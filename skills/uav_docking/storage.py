@@ -16,8 +16,9 @@ carrier sends it over its link: the carrier's own estimate ∘ the forward
 kinematics of Part A (encoders) ∘ the UAV's pose on Part A
 (``uav.reset_estimate``). The UAV then climbs straight up relative to the
 carrier (it moves with the carrier as it climbs, so Part A never sweeps into
-it) to a safe height above Part A, on the two robots' estimates, and the arm
-folds back for driving.
+it) to a safe height above Part A, on the two robots' estimates re-anchored
+by the eye-in-hand camera (the bundle's contact tag is in view from the
+release on), and the arm folds back for driving.
 
 Both keep their arm targets fresh every tick (one command per tick), so a
 node that takes the arm over in the same tick as they stop keeps it.
@@ -136,7 +137,7 @@ class Deploy(Skill):
                 T_M_Q = self.T_M_Q_release = self.hand_over()
                 self.p_clear_M = T_M_Q[:3, 3] + np.array([0.0, 0.0, self.params.clearance])
                 self.yaw_clear_M = yaw_of_rotation(T_M_Q[:3, :3])
-                self.relative = relative_pose_of(self, self.carrier, fuse=False, since=self.now)  # estimates after the hand-over
+                self.relative = relative_pose_of(self, self.carrier, since=self.now)  # the estimates after the hand-over
                 self.carrier.docking.release()
                 self.write(f"{self.params.carrier}/{UAV_STORED}", False)
                 self.phase = "climb"
