@@ -1,8 +1,8 @@
-"""How fast the world runs: physics steps/s, camera ms/frame and real-time factor.
+"""How fast the world runs: physics steps/s, camera ms/frame, estimator µs/update and real-time factor.
 
     python benchmarks/world_speed.py [--quick] [--out benchmarks/out/world_speed.json] [--profile]
 
-Three measurements, all in the ``open_field`` scene with the robots of the
+Four measurements, all in the ``open_field`` scene with the robots of the
 Palafox and Narváez set-ups, in a single thread:
 
 1. Physics steps per wall second of ``World.step`` with a hovering ``bebop2``
@@ -15,10 +15,18 @@ Palafox and Narváez set-ups, in a single thread:
    ``bebop2`` front camera behind the ``summit_xl``, and the
    ``mobile_manipulator`` eye-in-hand camera under a hovering ``bebop2``;
    the TinyRenderer share is timed separately.
-3. Real-time factor (simulated s / wall s) of a run in which the ``bebop2``
-   follows a slowly moving set-point and the ``summit_xl`` drives a circle,
-   controlled at 30 Hz, (a) without cameras and (b) reading the bebop2's
-   320×240 front camera at 30 Hz, every frame. Targets: ≥ 50× and ≥ 3×.
+3. Onboard estimators: wall µs per ``update`` call (median) and per
+   simulated second, timed inside a run — the ``bebop2``'s
+   ``FlightEstimator`` (120 Hz, including the IMU sample and the flow, sonar
+   and barometer samples it triggers), the ``summit_xl``'s ``WheelOdometry``
+   (called every physics step, integrating at 48 Hz) and a
+   ``mobile_manipulator``'s ``MapLocalization`` (odometry + 5 Hz map fixes),
+   next to the ``Autopilot`` update for scale.
+4. Real-time factor (simulated s / wall s) of a run in which the ``bebop2``
+   follows a slowly moving set-point on its own estimate and the
+   ``summit_xl`` drives a circle, controlled at 30 Hz, (a) without cameras
+   and (b) reading the bebop2's 320×240 front camera (noise, drops, latency
+   on, as by default) at 30 Hz, every frame. Targets: ≥ 50× and ≥ 3×.
 
 Other processes slow a wall-clock benchmark down, never up: every figure is
 the best of several repetitions (``--quick``: fewer and shorter).
@@ -177,6 +185,53 @@ def bench_cameras(quick: bool) -> list[dict[str, Any]]:
     return rows
 
 
+# --------------------------------------------------------------- estimators
+def _timed(owner: Any, method: str, times: list[float]) -> None:
+    """Replace ``owner.method`` by a wrapper appending each call's wall time (s) to ``times``."""
+    original = getattr(owner, method)
+
+    def timed(*args: Any, **kwargs: Any) -> Any:
+        start = time.perf_counter()
+        result = original(*args, **kwargs)
+        times.append(time.perf_counter() - start)
+        return result
+
+    setattr(owner, method, timed)
+
+
+def bench_estimators(quick: bool) -> list[dict[str, Any]]:
+    """Wall µs per update (median) and per simulated second of the onboard estimators, timed in a run."""
+    seconds = 10.0 if quick else 30.0
+    with field_with_pair() as world:
+        uav, ugv = world.robot("uav"), world.robot("ugv")
+        carrier = world.add_robot("mobile_manipulator", "carrier", pose=[-3.0, 0.0, 0.0], localization="map")
+        timed = {
+            "FlightEstimator.update (bebop2, 120 Hz)": (uav.estimator, "update"),
+            "Autopilot.update (bebop2, 120 Hz; for scale)": (uav.autopilot, "update"),
+            "WheelOdometry.update (summit_xl, every step, 48 Hz samples)": (ugv.estimator, "update"),
+            "MapLocalization.update (mobile_manipulator, odometry + 5 Hz fixes)": (carrier.estimator, "update"),
+        }
+        times: dict[str, list[float]] = {label: [] for label in timed}
+        for label, (owner, method) in timed.items():
+            _timed(owner, method, times[label])
+        ugv.drive(0.5, 0.05)
+        carrier.drive(0.5, -0.05)
+        tick = 1.0 / CONTROL_HZ
+        while world.now < seconds - 1e-9:
+            t = world.now
+            uav.command_velocity(0.5 * math.cos(0.3 * t), 0.5 * math.sin(0.3 * t), 0.0, frame="world")
+            world.step(tick)
+        return [
+            {
+                "estimator": label,
+                "calls_per_sim_s": len(samples) / world.now,
+                "median_us_per_call": 1e6 * float(np.median(samples)),
+                "us_per_sim_s": 1e6 * float(np.sum(samples)) / world.now,
+            }
+            for label, samples in times.items()
+        ]
+
+
 # ---------------------------------------------------------------- real time
 def fly_and_drive(seconds: float, read_camera: bool, profile: cProfile.Profile | None = None) -> dict[str, Any]:
     """Real-time factor of ``seconds`` of the bebop2 following a moving set-point and the summit_xl circling."""
@@ -190,9 +245,10 @@ def fly_and_drive(seconds: float, read_camera: bool, profile: cProfile.Profile |
         start = time.perf_counter()
         while world.now < seconds - 1e-9:
             t = world.now
-            # set-point circling 2 m around the origin once every 31 s, bobbing ±0.3 m
+            # set-point circling 2 m around the origin once every 31 s, bobbing ±0.3 m, tracked on the
+            # UAV's own estimate (odom frame, as "world" commands are)
             target = np.array([2.0 * math.cos(0.2 * t), 2.0 * math.sin(0.2 * t), 1.5 + 0.3 * math.sin(0.1 * t)])
-            position, _ = uav.pose()
+            position = uav.estimator.estimate().position
             v = np.clip(1.0 * (target - position), -1.0, 1.0)
             uav.command_velocity(*v, frame="world")
             if read_camera:
@@ -207,7 +263,8 @@ def fly_and_drive(seconds: float, read_camera: bool, profile: cProfile.Profile |
             "real_time_factor": world.now / wall,
             "frames_rendered": camera.samples_taken,
             "us_per_physics_step": 1e6 * wall / world.clock.steps,
-            "uav_tracking_error_m": float(np.linalg.norm(uav.pose()[0] - target)),
+            "uav_tracking_error_m": float(np.linalg.norm(uav.estimator.estimate().position - target)),
+            "uav_estimate_error_m": float(np.linalg.norm(uav.estimator.estimate().position - uav.pose()[0])),
         }
 
 
@@ -252,6 +309,14 @@ def print_report(report: dict[str, Any]) -> None:
             ],
         ),
         (
+            "Onboard estimators, timed inside a run (wall µs)",
+            ["update", "calls / sim s", "µs / call (median)", "µs / sim s"],
+            [
+                [r["estimator"], f"{r['calls_per_sim_s']:.0f}", f"{r['median_us_per_call']:.1f}", f"{r['us_per_sim_s']:.0f}"]
+                for r in report["estimators"]
+            ],
+        ),
+        (
             "Real-time factor (bebop2 following a set-point + summit_xl circling)",
             ["run", "sim s", "wall s", "RTF", "target", "frames", "µs/step"],
             [
@@ -279,6 +344,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "machine": machine_info(threads=threads, quick=args.quick),
         "physics": bench_physics(args.quick),
         "cameras": bench_cameras(args.quick),
+        "estimators": bench_estimators(args.quick),
     }
     report["real_time"], profiles = bench_real_time(args.quick, args.profile)
     if profiles:

@@ -76,7 +76,7 @@ def _trace(world, uav, seconds):
     return np.array(ps), np.array(vs), np.array(pitch)
 
 
-def test_bebop2_holds_its_estimate_within_2cm_and_drifts_boundedly_for_30s():
+def test_bebop2_holds_its_estimate_within_3cm_and_drifts_boundedly_for_30s():
     """The position hold runs on the onboard estimate: the estimate holds, the truth drifts (optical-flow
     dead reckoning); at perfect sensing the truth holds too."""
     for noise_scale, true_bound in ((1.0, 0.25), (0.0, 0.02)):
@@ -88,7 +88,7 @@ def test_bebop2_holds_its_estimate_within_2cm_and_drifts_boundedly_for_30s():
             for _ in range(30):
                 world.step(1.0)
                 estimates.append(uav.estimator.estimate().position)
-            assert np.linalg.norm(np.array(estimates) - start, axis=1).max() < 0.02
+            assert np.linalg.norm(np.array(estimates) - start, axis=1).max() < 0.03
             assert np.linalg.norm(uav.pose()[0] - start) < true_bound
 
 
@@ -183,7 +183,7 @@ def test_motors_off_falls_and_motors_on_takes_off_from_the_floor():
 
 
 def test_docking_hand_over_holds_charges_and_releases_into_hover():
-    with World() as world:
+    with World(noise_scale=0.0) as world:  # the hand-over mechanics; drift is tested in test_estimation.py
         uav = world.add_robot("bebop2", pose=[0.0, 0.0, 1.2, 0.0], battery_soc=0.5)
         cid = world.client_id
         world.step(0.5)

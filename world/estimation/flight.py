@@ -62,15 +62,20 @@ class FlightEstimatorGains:
         baro_omega: natural frequency of the height loop on the barometer (rad/s).
         baro_calibration_tau: time constant (s) of the barometer offset's calibration against the sonar.
         sonar_gate: largest accepted difference (m) between an echo's height and the predicted height.
+        sonar_rate_gate: largest accepted difference (m/s) between the echo's rate of change and the
+            estimated climb rate (an echo sliding along the side of an obstacle changes fast).
+        sonar_soft: innovation (m) beyond which an accepted echo's weight falls as ``sonar_soft / |e|``.
         height_timeout: age (s) beyond which the last valid echo no longer makes the height valid.
     """
 
     flow_velocity: float = 8.0
-    flow_bias: float = 0.5
+    flow_bias: float = 2.0
     sonar_omega: float = 3.0
     baro_omega: float = 0.7
     baro_calibration_tau: float = 20.0
     sonar_gate: float = 0.25
+    sonar_rate_gate: float = 1.5
+    sonar_soft: float = 0.05
     height_timeout: float = 0.2
 
 
@@ -81,6 +86,8 @@ class FlightEstimator(Estimator):
         world: the world (for the simulated clock only).
         imu, flow, sonar, barometer: the vehicle's sensors.
         floor_height: height (m) of the floor the mission declares (world z).
+        landed_height: height (m) of the base above a surface it stands on (model): the estimate
+            never goes below ``floor_height + landed_height``.
         sonar_offset_z: z (m) of the sonar's origin in the base frame (negative: below the base).
         position, yaw: start pose (m, rad) in the navigation frame.
 
@@ -101,6 +108,7 @@ class FlightEstimator(Estimator):
         sonar: Sonar,
         barometer: Barometer,
         floor_height: float,
+        landed_height: float,
         sonar_offset_z: float,
         position: tuple[float, float, float],
         yaw: float,
@@ -109,6 +117,8 @@ class FlightEstimator(Estimator):
         self.clock = world.clock
         self.imu, self.flow, self.sonar, self.barometer = imu, flow, sonar, barometer
         self.floor_height = float(floor_height)
+        self.lowest = float(floor_height) + float(landed_height)
+        self._last_echo = (-math.inf, 0.0)  # stamp (s) and height (m) of the previous valid echo
         self.sonar_offset_z = float(sonar_offset_z)
         self.gains = gains
         self.p = [0.0, 0.0, 0.0]
@@ -120,6 +130,7 @@ class FlightEstimator(Estimator):
         self._t_floor_echo = -math.inf
         self._last = {"flow": -1.0, "sonar": -1.0, "baro": -1.0}
         self._baro_offset: float | None = None  # m, navigation z minus barometer reading
+        self._baro_n = 0  # samples in the offset's running mean
         self._w = (0.0, 0.0, 0.0)
         self._q_imu = self._q = (0.0, 0.0, 0.0, 1.0)
         self._cache: StateEstimate | None = None
@@ -171,6 +182,8 @@ class FlightEstimator(Estimator):
         p[1] += 0.5 * (v0y + v[1]) * dt
         p[2] += 0.5 * (v0z + v[2]) * dt
         self._correct_height(r22)
+        if p[2] < self.lowest:  # it cannot be under the floor (the velocity is left to the accelerometer,
+            p[2] = self.lowest  # which feels the touchdown)
         self._correct_flow()
 
     # --------------------------------------------------------------- helpers
@@ -187,10 +200,21 @@ class FlightEstimator(Estimator):
         self._last[key] = reading.stamp
         return reading.data
 
+    def _calibrate_baro(self, z: float, baro: float) -> None:
+        """Offset of the barometer (navigation z minus reading): running mean of the first samples, then
+        an exponential average of time constant ``baro_calibration_tau`` (the offset drifts)."""
+        target = z - baro
+        if self._baro_offset is None:
+            self._baro_offset, self._baro_n = target, 1
+            return
+        self._baro_n += 1
+        gain = max(1.0 / self._baro_n, self.barometer.period / self.gains.baro_calibration_tau)
+        self._baro_offset += (target - self._baro_offset) * gain
+
     def _calibrate_baro_at_rest(self) -> None:
         baro = self._new("baro", self.barometer)
         if baro is not None:
-            self._baro_offset = self.p[2] - float(baro)  # type: ignore[arg-type]
+            self._calibrate_baro(self.p[2], float(baro))  # type: ignore[arg-type]
 
     def _correct_height(self, r22: float) -> None:
         """Sonar echoes gated on the expected floor; the barometer when no floor echo is recent."""
@@ -199,27 +223,26 @@ class FlightEstimator(Estimator):
         if echo is not None:
             rng = echo.range  # type: ignore[attr-defined]
             if echo.min_range < rng < echo.max_range:  # type: ignore[attr-defined]
-                self._t_echo = now
                 tilt = math.acos(max(-1.0, min(1.0, r22)))
                 height = rng * math.cos(max(0.0, tilt - echo.half_angle)) - self.sonar_offset_z  # type: ignore[attr-defined]
+                t_prev, h_prev = self._last_echo
+                rate = (height - h_prev) / (now - t_prev) if now - t_prev < 0.5 else v[2]
+                self._t_echo, self._last_echo = now, (now, height)
                 e = self.floor_height + height - p[2]
-                if abs(e) < g.sonar_gate:
-                    period = self.sonar.period
-                    p[2] += 2.0 * g.sonar_omega * period * e
-                    v[2] += g.sonar_omega**2 * period * e
+                if abs(e) < g.sonar_gate and abs(rate - v[2]) < g.sonar_rate_gate:  # an echo off the floor
+                    k = self.sonar.period * min(1.0, g.sonar_soft / abs(e)) if e else 0.0
+                    p[2] += 2.0 * g.sonar_omega * k * e
+                    v[2] += g.sonar_omega**2 * k * e
                     self._t_floor_echo = now
         self.height_valid = now - self._t_echo <= g.height_timeout
         baro = self._new("baro", self.barometer)
         if baro is None:
             return
-        if self._baro_offset is None:
-            self._baro_offset = p[2] - float(baro)  # type: ignore[arg-type]
-            return
-        z_baro = float(baro) + self._baro_offset  # type: ignore[arg-type]
-        period = self.barometer.period
-        if now - self._t_floor_echo <= g.height_timeout:  # sonar holds the height: calibrate the barometer
-            self._baro_offset += (p[2] - z_baro) * period / g.baro_calibration_tau
+        if self._baro_offset is None or now - self._t_floor_echo <= g.height_timeout:
+            self._calibrate_baro(p[2], float(baro))  # type: ignore[arg-type]  # sonar holds the height
         else:
+            z_baro = float(baro) + self._baro_offset  # type: ignore[arg-type]
+            period = self.barometer.period
             e = z_baro - p[2]
             p[2] += 2.0 * g.baro_omega * period * e
             v[2] += g.baro_omega**2 * period * e

@@ -124,6 +124,12 @@ class Robot:
         v, w = pybullet.getBaseVelocity(self.body_id, physicsClientId=self.cid)
         return np.array(v), np.array(w)
 
+    def base_state(self) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...], tuple[float, ...]]:
+        """Base position, orientation, linear and angular velocity (world frame) as plain tuples (sensor models)."""
+        p, q = pybullet.getBasePositionAndOrientation(self.body_id, physicsClientId=self.cid)
+        v, w = pybullet.getBaseVelocity(self.body_id, physicsClientId=self.cid)
+        return p, q, v, w
+
     def link_pose(self, link: str | int) -> tuple[np.ndarray, np.ndarray]:
         """World pose of a link frame (URDF link frame, not its inertial frame)."""
         index = self.link_index(link) if isinstance(link, str) else link

@@ -97,6 +97,8 @@ class FlowMount:
     noise_per_m: float = 0.02  # chosen, see docs/world.md (order of PX4Flow's errors, Honegger et al. 2013)
     scale_std: float = 0.03  # chosen: lens and range calibration
     min_range: float = 0.05  # m, the texture is out of focus nearer than this (chosen)
+    bias_std: float = 0.003  # m/s, slowly varying bias (texture, lighting; chosen, see docs/world.md)
+    bias_tau: float = 30.0  # s
 
 
 @dataclass(frozen=True)
@@ -306,6 +308,7 @@ class Quadrotor(Robot):
         self.thrust = 0.0  # N, last applied
         self.power = 0.0  # W, last drawn
         self._v_sample, self._v_sample_step = (0.0, 0.0, 0.0), 0
+        self._state_step = -1  # physics step of the cached base state
         self._power_model = spec.power
         self.autopilot = Autopilot(spec.limits, spec.gains, spec.drag, self.mass, inertia)
         self._period = max(1, world.clock.steps_for(1.0 / spec.autopilot_hz))  # physics steps per autopilot update
@@ -319,6 +322,7 @@ class Quadrotor(Robot):
             self.sensors[f"{name}/sonar"],  # type: ignore[arg-type]
             self.sensors[f"{name}/barometer"],  # type: ignore[arg-type]
             floor_height=floor,
+            landed_height=spec.landed_height,
             sonar_offset_z=spec.sonar.offset[2],
             position=tuple(float(c) for c in position),  # type: ignore[arg-type]
             yaw=yaw_of(orientation),
@@ -345,7 +349,10 @@ class Quadrotor(Robot):
         self.add_sensor(Barometer(self, "barometer", cfg["barometer"]))
         self.add_sensor(Sonar(self, "sonar", cfg["sonar"], s.half_angle, s.max_range, s.min_range, offset=s.offset))
         self.add_sensor(
-            OpticalFlow(self, "flow", cfg["flow"], f.noise_per_m, f.scale_std, f.min_range, s.max_range, offset=s.offset)
+            OpticalFlow(
+                self, "flow", cfg["flow"], f.noise_per_m, f.scale_std, f.min_range, s.max_range,
+                offset=s.offset, bias_std=f.bias_std, bias_tau=f.bias_tau,
+            )
         )
         self.add_sensor(BatteryGauge(self.world, f"{self.name}/battery", self.battery, cfg["battery"]))
         for cam in self.spec.cameras:
@@ -442,11 +449,16 @@ class Quadrotor(Robot):
         s = self._v_sample
         return ((v[0] - s[0]) / elapsed, (v[1] - s[1]) / elapsed, (v[2] - s[2]) / elapsed)
 
+    def base_state(self) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...], tuple[float, ...]]:
+        """Base position, orientation, velocity, angular velocity (world) as tuples; read once per autopilot step."""
+        if self._state_step != self._clock.steps:
+            self._state = super().base_state()
+            self._state_step = self._clock.steps
+        return self._state
+
     def inertial_truth(self) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, float, float]]:
         """True orientation, world angular velocity and acceleration as tuples (the IMU's input; world side)."""
-        cid, body = self.cid, self.body_id
-        q = pybullet.getBasePositionAndOrientation(body, physicsClientId=cid)[1]
-        v, w = pybullet.getBaseVelocity(body, physicsClientId=cid)
+        _, q, v, w = self.base_state()
         return q, w, self._acceleration(v)
 
     def hover_endurance_s(self) -> float:
@@ -490,10 +502,10 @@ class Quadrotor(Robot):
                 self.battery.charge(dt)
             return
         self._phase = self._period
-        cid, body = self.cid, self.body_id
         period_dt = dt * self._period
+        self._state_step = -1  # forces applied since: read the state anew
         self.estimator.update(period_dt, at_rest=not flying)  # reads the IMU (acceleration since the last update)
-        v, w_world = pybullet.getBaseVelocity(body, physicsClientId=cid)
+        p, q, v, w_world = self.base_state()
         self._v_sample, self._v_sample_step = v, self._clock.steps
         if self._motors and self._docked:
             self._spin_up(period_dt)
@@ -507,7 +519,6 @@ class Quadrotor(Robot):
             else:
                 self.battery.rest()
             return
-        p, q = pybullet.getBasePositionAndOrientation(body, physicsClientId=cid)
         wind = self.world.wind.velocity(self._clock.now, np.array(p))
         force, torque, thrust, drag_power = self.autopilot.update(
             self.estimator, q, v, w_world, (float(wind[0]), float(wind[1]), float(wind[2])), period_dt

@@ -43,11 +43,10 @@ class Barometer(Sensor[float]):
         self._t_offset = robot.world.now
 
     def measure(self) -> float:
-        altitude = float(self.robot.pose()[0][2]) - self.reference_height
+        altitude = float(self.robot.base_state()[0][2]) - self.reference_height
         now = self.world.now
+        n_drift, n_white = self.normals.take(2)
         if self.drift_std > 0 and now > self._t_offset:
-            self.offset += self.drift_std * math.sqrt(now - self._t_offset) * float(self.rng.standard_normal())
+            self.offset += self.drift_std * math.sqrt(now - self._t_offset) * n_drift
         self._t_offset = now
-        if self.config.noise_std > 0:
-            altitude += float(self.rng.normal(0.0, self.config.noise_std))
-        return altitude + self.offset
+        return altitude + self.config.noise_std * n_white + self.offset

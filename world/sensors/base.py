@@ -71,6 +71,31 @@ class SensorConfig:
         )
 
 
+class NormalStream:
+    """Standard normal draws of one generator, fetched in blocks: a draw costs a list slice, not a numpy call.
+
+    For the per-sample noise of the sensors read at the autopilot rate (plain
+    ``math`` paths); deterministic for a given generator.
+    """
+
+    __slots__ = ("_rng", "_block", "_buf", "_i")
+
+    def __init__(self, rng: Any, block: int = 1024):
+        self._rng = rng
+        self._block = block
+        self._buf: list[float] = []
+        self._i = 0
+
+    def take(self, n: int) -> list[float]:
+        """The next ``n`` standard normal values."""
+        i, j = self._i, self._i + n
+        if j > len(self._buf):
+            self._buf = self._rng.standard_normal(max(self._block, n)).tolist()
+            i, j = 0, n
+        self._i = j
+        return self._buf[i:j]
+
+
 @dataclass(frozen=True)
 class Reading(Generic[T]):
     """One sample: the simulated time it was taken (s) and its data."""
@@ -97,6 +122,7 @@ class Sensor(Generic[T]):
         self.noise_scale = world.noise_scale
         self.config = config.scaled(world.noise_scale)
         self.rng = world.rng_for(f"sensor/{name}")
+        self.normals = NormalStream(self.rng)
         self.enabled = True
         self._period_steps = max(1, world.clock.steps_for(1.0 / config.rate_hz))
         #: actual sampling period (s): whole physics steps

@@ -11,8 +11,11 @@ horizontal: the firmware derotates the flow with the gyro and the attitude).
 
 Errors (scaled by ``world.noise_scale``; sources in ``docs/world.md``):
 white noise of 1σ ``config.noise_std + noise_per_m · range`` (m/s per axis:
-the flow in pixels shrinks with height, so its metric noise grows) and a
-per-run scale error (1σ ``scale_std``: lens and range calibration). No
+the flow in pixels shrinks with height, so its metric noise grows), a
+per-run scale error (1σ ``scale_std``: lens and range calibration) and a
+slowly varying bias per axis (Ornstein–Uhlenbeck, 1σ ``bias_std``, time
+constant ``bias_tau``: texture and lighting under the camera), which no
+other sensor observes, so the integrated position drifts. No
 surface within ``max_range`` or nearer than ``min_range`` (out of focus):
 the sample is invalid.
 """
@@ -53,6 +56,7 @@ class OpticalFlow(Sensor[FlowData]):
     Args:
         noise_per_m: growth of the velocity noise with range ((m/s)/m).
         scale_std: 1σ per-run scale error (fraction).
+        bias_std, bias_tau: 1σ (m/s) and time constant (s) of the slowly varying bias.
         min_range, max_range: ranges (m) within which the flow is valid.
     """
 
@@ -66,6 +70,8 @@ class OpticalFlow(Sensor[FlowData]):
         min_range: float,
         max_range: float,
         offset: tuple[float, float, float] = (0.0, 0.0, 0.0),
+        bias_std: float = 0.0,
+        bias_tau: float = 30.0,
     ):
         super().__init__(robot.world, f"{robot.name}/{name}", config)
         self.robot = robot
@@ -74,10 +80,25 @@ class OpticalFlow(Sensor[FlowData]):
         self.min_range = min_range
         self.max_range = max_range
         self.offset = tuple(float(v) for v in offset)
+        self._static: set[int] = set()  # static bodies of this world seen under the camera
+        self.bias_std, self.bias_tau = bias_std * self.noise_scale, bias_tau
+        self.bias = [self.bias_std * float(b) for b in self.rng.standard_normal(2)]  # stationary start
+        self._t_bias = robot.world.now
+
+    def _advance_bias(self) -> None:
+        """OU step of the bias to now: b ← b φ + σ √(1 - φ²) n, φ = exp(-Δt / τ)."""
+        now = self.world.now
+        if self.bias_std > 0.0 and now > self._t_bias:
+            phi = math.exp(-(now - self._t_bias) / self.bias_tau)
+            s = self.bias_std * math.sqrt(1.0 - phi * phi)
+            n0, n1 = self.normals.take(2)
+            self.bias[0] = self.bias[0] * phi + s * n0
+            self.bias[1] = self.bias[1] * phi + s * n1
+        self._t_bias = now
 
     def measure(self) -> FlowData:
         cid, own = self.world.client_id, self.robot.body_id
-        p, q = pybullet.getBasePositionAndOrientation(own, physicsClientId=cid)
+        p, q, v, _ = self.robot.base_state()
         x, y, z, w = q
         # body axes in the world frame: columns of R_world_body
         r00, r10 = 1 - 2 * (y * y + z * z), 2 * (x * y + w * z)
@@ -96,21 +117,33 @@ class OpticalFlow(Sensor[FlowData]):
         distance = fraction * L
         if body < 0 or body == own or distance < self.min_range:
             return FlowData(False, 0.0, 0.0, math.inf)
-        v = pybullet.getBaseVelocity(own, physicsClientId=cid)[0]
-        sx, sy = _surface_velocity(body, link, hit, cid)
+        sx, sy = _surface_velocity(body, link, hit, cid, self._static)
         dvx, dvy = v[0] - sx, v[1] - sy
         yaw = math.atan2(r10, r00)
         c, s = math.cos(yaw), math.sin(yaw)
-        vx, vy = self.scale * (c * dvx + s * dvy), self.scale * (-s * dvx + c * dvy)
+        self._advance_bias()
+        vx = self.scale * (c * dvx + s * dvy) + self.bias[0]
+        vy = self.scale * (-s * dvx + c * dvy) + self.bias[1]
         std = self.config.noise_std + self.noise_per_m * distance
         if std > 0.0:
-            n0, n1 = self.rng.standard_normal(2).tolist()
+            n0, n1 = self.normals.take(2)
             vx, vy = vx + std * n0, vy + std * n1
         return FlowData(True, vx, vy, distance)
 
 
-def _surface_velocity(body: int, link: int, point: tuple[float, float, float], cid: int) -> tuple[float, float]:
-    """Horizontal world velocity (m/s) of ``point`` on ``body``'s ``link`` (rigid-body: v + ω × r)."""
+def _surface_velocity(
+    body: int, link: int, point: tuple[float, float, float], cid: int, static: set[int]
+) -> tuple[float, float]:
+    """Horizontal world velocity (m/s) of ``point`` on ``body``'s ``link`` (rigid-body: v + ω × r).
+
+    ``static`` collects the ids of massless single-body bodies (floor, walls) met so far: they never move.
+    """
+    if body in static:
+        return 0.0, 0.0
+    if link < 0 and pybullet.getNumJoints(body, physicsClientId=cid) == 0:
+        if pybullet.getDynamicsInfo(body, -1, physicsClientId=cid)[0] == 0.0:
+            static.add(body)
+            return 0.0, 0.0
     if link < 0:
         (vx, vy, _), (wx, wy, wz) = pybullet.getBaseVelocity(body, physicsClientId=cid)
         if not (vx or vy or wx or wy or wz):

@@ -131,18 +131,15 @@ class Imu(Sensor[ImuData]):
         self._att_err = [float(draw[6]) * self._att_std, float(draw[7]) * self._att_std, 0.0]
         self._t_err = robot.world.now
 
-    def _advance_errors(self) -> None:
-        """Propagate the attitude error to now (exact OU discretisation: e ← e·φ + σ√(1-φ²)·n)."""
-        now = self.world.now
+    def _advance_errors(self, now: float) -> None:
+        """Propagate the attitude error to ``now`` (exact OU discretisation: e ← e·φ + σ√(1-φ²)·n)."""
         dt = now - self._t_err
-        if dt <= 0.0:
-            return
         self._t_err = now
         e = self._att_err
         if self._att_std > 0.0:
             phi = math.exp(-dt / self._att_tau)
             s = self._att_std * math.sqrt(1.0 - phi * phi)
-            n0, n1 = self.rng.standard_normal(2).tolist()
+            n0, n1 = self.normals.take(2)
             e[0] = e[0] * phi + s * n0
             e[1] = e[1] * phi + s * n1
         e[2] += self.gyro_bias[2] * dt
@@ -150,25 +147,29 @@ class Imu(Sensor[ImuData]):
     def sample(self) -> tuple[Vec3, Vec3, Quat]:
         """One measurement now in plain floats: ``(specific force (body), rates (body), orientation)``."""
         q, w_world, a_world = self.robot.inertial_truth()
-        self._advance_errors()
+        now = self.world.clock.steps / self.world.clock.physics_hz
+        if now > self._t_err:
+            self._advance_errors(now)
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation_rows(q)
         ax, ay, az = a_world[0], a_world[1], a_world[2] + GRAVITY
         wx, wy, wz = w_world
         ba, bg = self.accel_bias, self.gyro_bias
-        f = [r00 * ax + r10 * ay + r20 * az + ba[0], r01 * ax + r11 * ay + r21 * az + ba[1], r02 * ax + r12 * ay + r22 * az + ba[2]]
-        w = [r00 * wx + r10 * wy + r20 * wz + bg[0], r01 * wx + r11 * wy + r21 * wz + bg[1], r02 * wx + r12 * wy + r22 * wz + bg[2]]
+        fx = r00 * ax + r10 * ay + r20 * az + ba[0]
+        fy = r01 * ax + r11 * ay + r21 * az + ba[1]
+        fz = r02 * ax + r12 * ay + r22 * az + ba[2]
+        gx = r00 * wx + r10 * wy + r20 * wz + bg[0]
+        gy = r01 * wx + r11 * wy + r21 * wz + bg[1]
+        gz = r02 * wx + r12 * wy + r22 * wz + bg[2]
         sa, sg = self.config.noise_std, self.gyro_noise_std
         if sa > 0.0 or sg > 0.0:
-            n = self.rng.standard_normal(6).tolist()
-            for i in range(3):
-                f[i] += sa * n[i]
-                w[i] += sg * n[3 + i]
+            n0, n1, n2, n3, n4, n5 = self.normals.take(6)
+            fx, fy, fz = fx + sa * n0, fy + sa * n1, fz + sa * n2
+            gx, gy, gz = gx + sg * n3, gy + sg * n4, gz + sg * n5
         ex, ey, ez = self._att_err
         if ex or ey or ez:  # small world-frame error rotation applied on the left
-            q_err = (0.5 * ex, 0.5 * ey, 0.5 * ez, 1.0)
-            norm = math.sqrt(1.0 + 0.25 * (ex * ex + ey * ey + ez * ez))
-            q = quat_multiply(tuple(c / norm for c in q_err), q)  # type: ignore[arg-type]
-        return (f[0], f[1], f[2]), (w[0], w[1], w[2]), q
+            k = 0.5 / math.sqrt(1.0 + 0.25 * (ex * ex + ey * ey + ez * ez))
+            q = quat_multiply((k * ex, k * ey, k * ez, 2.0 * k), q)
+        return (fx, fy, fz), (gx, gy, gz), q
 
     def measure(self) -> ImuData:
         f, w, q = self.sample()

@@ -71,21 +71,27 @@ class Sonar(Sensor[RangeData]):
 
     def measure(self) -> RangeData:
         """Cast the beam now: shortest hit (m) of the rays not on the robot itself, with noise."""
-        p_link, q_link = self.robot.link_pose(self.link)
+        if self.link == -1:
+            p_link, q_link, _, _ = self.robot.base_state()
+        else:
+            p_link, q_link = self.robot.link_pose(self.link)
         R = pybullet.getMatrixFromQuaternion(q_link)
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = R
         ox, oy, oz = self.offset
-        origin = [p_link[i] + R[3 * i] * ox + R[3 * i + 1] * oy + R[3 * i + 2] * oz for i in range(3)]
+        o0 = p_link[0] + r00 * ox + r01 * oy + r02 * oz
+        o1 = p_link[1] + r10 * ox + r11 * oy + r12 * oz
+        o2 = p_link[2] + r20 * ox + r21 * oy + r22 * oz
         ends = [
-            [origin[i] + R[3 * i] * x + R[3 * i + 1] * y + R[3 * i + 2] * z for i in range(3)]
+            (o0 + r00 * x + r01 * y + r02 * z, o1 + r10 * x + r11 * y + r12 * z, o2 + r20 * x + r21 * y + r22 * z)
             for x, y, z in self._ends_link
         ]
-        hits = pybullet.rayTestBatch([origin] * len(ends), ends, physicsClientId=self.world.client_id)
+        hits = pybullet.rayTestBatch([(o0, o1, o2)] * len(ends), ends, physicsClientId=self.world.client_id)
         own = self.robot.body_id
-        fractions = [h[2] for h in hits if h[0] >= 0 and h[0] != own]
-        if not fractions:
+        fraction = min((h[2] for h in hits if h[0] >= 0 and h[0] != own), default=None)
+        if fraction is None:
             return RangeData(math.inf, self.half_angle, self.min_range, self.max_range)
-        distance = min(fractions) * self.max_range
+        distance = fraction * self.max_range
         if self.config.noise_std > 0:
-            distance += self.rng.normal(0.0, self.config.noise_std)
+            distance += self.config.noise_std * self.normals.take(1)[0]
         distance = min(self.max_range, max(self.min_range, distance))
         return RangeData(distance, self.half_angle, self.min_range, self.max_range)
