@@ -169,7 +169,7 @@ def command_hold(uav: Any, state: RelativeState, p_target_M: np.ndarray, yaw_tar
 
 
 def relative_pose_of(
-    skill: Skill, carrier: Any, gain: float = 0.3, gate: float = 0.03, fuse: bool = True, since: float = -math.inf
+    skill: Skill, carrier: Any, gain: float = 0.8, gate: float = 0.03, fuse: bool = True, since: float = -math.inf
 ) -> RelativePose:
     """The :class:`~.relative_pose.RelativePose` of ``skill``'s UAV relative to ``carrier``, computed on the carrier.
 

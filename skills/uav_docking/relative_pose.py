@@ -112,7 +112,7 @@ class RelativePoseFilter:
     """
 
     def __init__(
-        self, gain: float = 0.3, gate: float = 0.03, max_rejections: int = 5,
+        self, gain: float = 0.8, gate: float = 0.03, max_rejections: int = 5,
         rate_gain: float = 0.15, gate_rate: float = 0.6, max_rate: float = 1.5, rate_horizon: float = 1.0,
     ):
         if not 0.0 < gain <= 1.0 or gate <= 0.0 or max_rejections < 1 or not 0.0 <= rate_gain < 1.0 or gate_rate < 0.0:
@@ -219,7 +219,7 @@ class RelativePose:
         since: UAV telemetry stamped before this time (s) is ignored (e.g. before its estimator was reset).
     """
 
-    def __init__(self, carrier, link, uav: str, observer, gain: float = 0.3, gate: float = 0.03, since: float = -math.inf):
+    def __init__(self, carrier, link, uav: str, observer, gain: float = 0.8, gate: float = 0.03, since: float = -math.inf):
         self.carrier, self.link, self.uav, self.observer = carrier, link, uav, observer
         self.T_base_M = transform(*carrier.arm_mount())  # M in the footprint frame the carrier's estimate is of
         self.filter = RelativePoseFilter(gain, gate)

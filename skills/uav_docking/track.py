@@ -45,7 +45,8 @@ contact phase) and the docking flag; reads ``<carrier>/contact_target``
 (with ``contact``). Metrics (Fig. 20), all the skill's own ESTIMATES (the
 referee logs the truth): ``part_a_M`` (forward kinematics of the encoders)
 and ``part_b_M`` (label ``axis``, the estimated UAV pose while the marker
-is seen), ``camera_offset``, ``docking_gap_estimate``.
+is seen), ``uav_M_estimate`` (label ``axis``: the estimated P_Q^M position,
+every tick once measured), ``camera_offset``, ``docking_gap_estimate``.
 
 Frames: manipulator frame M (``arm_base``), metres, radians, seconds.
 """
@@ -170,8 +171,10 @@ class Track(Skill):
         """Gains (K_a 1/m, K_b) of the vicinity (eq. 7) during contact: the relative pose is held, the end effector only rises."""
         lead: float = Field(0.15, ge=0.0)
         """The engine plans on the UAV pose this far ahead (s), from its estimated velocity relative to M: the arm's lag."""
-        fusion_gain: float = Field(0.3, gt=0.0, le=1.0)
-        """Weight of each eye-in-hand measurement in the UAV pose estimate (:class:`~.relative_pose.RelativePoseFilter`)."""
+        fusion_gain: float = Field(0.8, gt=0.0, le=1.0)
+        """Weight of each eye-in-hand measurement in the UAV pose estimate (:class:`~.relative_pose.RelativePoseFilter`; the
+        camera is precise to millimetres at tracking range, the UAV's odometry over the carrier is not: 2.3 cm RMS of P_Q^M
+        against truth at 0.8 in a 25 s encounter, 6.3 cm at 0.3)."""
         fusion_gate: float = Field(0.03, gt=0.0)
         """Measurements farther than this (m) from the predicted pose are outliers (:class:`~.relative_pose.RelativePoseFilter`)."""
         f_B: float = Field(4.0, gt=0.0)
@@ -318,6 +321,7 @@ class Track(Skill):
         p_B_M = (self.T_M_Q @ self.T_Q_B)[:3, 3]
         for k, axis in enumerate("xyz"):
             self.context.metric("part_a_M", float(p_A_M[k]), robot=robot, axis=axis)
+            self.context.metric("uav_M_estimate", float(self.T_M_Q[k, 3]), robot=robot, axis=axis)
             if state.seen:
                 self.context.metric("part_b_M", float(p_B_M[k]), robot=robot, axis=axis)
         if state.seen:
