@@ -83,6 +83,19 @@ def test_estimate_starts_at_the_spawn_pose_and_holds_with_the_motors_off():
         assert later.position == pytest.approx(estimate.position) and np.allclose(later.velocity, 0.0)
 
 
+def test_a_stored_uav_starts_its_estimate_on_the_dock_and_holds_it_while_carried():
+    with World(seed=0) as world:
+        carrier = world.add_robot("mobile_manipulator", pose=[0.0, 0.0, 0.0])
+        uav = world.add_robot("bebop2", pose=[3.0, 3.0, 0.0])
+        carrier.store(uav)  # set-up: the run starts with the UAV locked on Part A
+        stored = uav.estimator.estimate()
+        assert stored.position == pytest.approx(uav.pose()[0], abs=1e-6)
+        carrier.drive(1.0, 0.0)
+        world.step(3.0)
+        assert uav.docked and uav.pose()[0][0] > stored.position[0] + 2.0  # carried 2+ m
+        assert uav.estimator.estimate().position == pytest.approx(stored.position)  # held until a hand-over
+
+
 def test_sonar_echoes_off_an_obstacle_below_do_not_move_the_height():
     with World(seed=4) as world:
         cid = world.client_id
@@ -139,6 +152,12 @@ def test_wheel_speed_is_measured_and_the_odometry_frame_is_odom():
         world.step(2.0)
         assert onboard_of(ugv).speed() == pytest.approx(0.8, rel=0.05) and onboard_of(ugv).speed() != ugv.speed()
         assert ugv.estimator.estimate().frame == "odom" and ugv.estimator.estimate().source == "wheel_odometry"
+        ugv.stop()
+        world.step(2.0)
+        parked = ugv.estimator.estimate()
+        world.step(10.0)
+        assert np.array_equal(ugv.estimator.estimate().position, parked.position)  # standing wheels: no drift
+        assert ugv.wheel_speed() == 0.0
 
 
 def test_map_localisation_error_stays_bounded_while_odometry_drifts():
@@ -215,6 +234,14 @@ def test_ardrone2_bottom_camera_is_0_1_s_late_and_plain_rgb():
         assert min(ages) == pytest.approx(0.1, abs=1e-6)  # the freshest frame is 0.1 s old
         assert reading.data.depth is None and not uav.sensor("bottom_camera").measures_depth
         assert uav.sensor("bottom_camera").config.dropout == 0.02  # Wi-Fi video loses frames
+
+
+def test_the_onboard_lidar_scan_carries_no_pose_and_no_body_ids():
+    with World(seed=0) as world:
+        mm = world.add_robot("mobile_manipulator")
+        scan = onboard_of(mm).sensor("lidar").read().data
+        assert not hasattr(scan, "position") and not hasattr(scan, "hit_bodies")
+        assert scan.ranges.shape == scan.angles.shape == (541,) and scan.max_range == 20.0
 
 
 def test_one_seed_is_deterministic_and_two_seeds_differ():

@@ -135,7 +135,7 @@ def test_bad_overrides_list_close_names():
     with pytest.raises(MissionError) as caught:
         load_mission(ALL_NODES, {"world.sed": "3"})
     assert str(caught.value) == (f"{SHOWN}: --set world.sed=3: unknown key 'world.sed'; "
-                                 "expected one of world.disturbances, world.scene, world.seed; did you mean 'world.seed'?")
+                                 "expected one of world.disturbances, world.scene, world.seed, world.sensing; did you mean 'world.seed'?")
 
 
 def test_override_with_a_wrong_type_points_at_the_key_and_names_the_override():

@@ -32,7 +32,7 @@ from typing import Any
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from .errors import MissionError
+from .errors import MissionError, check_seed
 from .mission import load_mission
 
 BACKENDS = ("local", "ray")
@@ -155,9 +155,12 @@ def plan_trials(
 ) -> list[Trial]:
     """The trials of a campaign: every combination of ``vary`` values × seeds ``base_seed + i``.
 
-    Each combination is validated by loading the mission with its overrides
-    (a :class:`MissionError` before anything runs).
+    Each combination is validated by loading and compiling the mission with
+    its overrides (a :class:`MissionError` before anything runs).
     """
+    from .compiler import compile_mission
+
+    check_seed(base_seed, "--seed")
     if trials < 1:
         raise MissionError(f"--trials {trials}: a campaign needs at least one trial", expected="an integer >= 1")
     if keep_logs not in KEEP_LOGS:
@@ -166,7 +169,7 @@ def plan_trials(
     keys = list(vary or {})
     combos = [dict(zip(keys, values)) for values in itertools.product(*(list((vary or {})[k]) for k in keys))]
     for combo in combos:
-        load_mission(mission, {**overrides, **combo})
+        compile_mission(load_mission(mission, {**overrides, **combo}))
     plan = []
     for combo in combos:
         for i in range(trials):

@@ -20,6 +20,7 @@ from typing import Any
 import click
 from rich.console import Console
 from rich.table import Table
+from rich.text import Text
 
 import marsupial
 
@@ -41,8 +42,17 @@ def bad_input() -> Iterator[None]:
     try:
         yield
     except (MissionError, WorldError, LogError) as err:
-        _err.print(f"[bold red]error:[/] {err}", highlight=False, markup=True, soft_wrap=True)
+        _err.print(Text.assemble(("error:", "bold red"), " ", str(err)), highlight=False, soft_wrap=True)  # literal text
         raise SystemExit(2) from None
+
+
+def marsupial_metadata(run_log: Any, log: str) -> dict[str, str]:
+    """The marsupial metadata of a read log; a :class:`LogError` (exit 2) for an MCAP file marsupial did not write."""
+    from .replay import LogError
+
+    if "mission" not in run_log.metadata:
+        raise LogError(f"{log}: no marsupial metadata (mission, seed): not a marsupial run log")
+    return dict(run_log.metadata)
 
 
 def _assignments(items: tuple[str, ...], what: str) -> dict[str, str]:
@@ -65,6 +75,17 @@ def _compiled(mission_ref: str, sets: tuple[str, ...]) -> Any:
     return compile_mission(load_mission(mission_ref, _assignments(sets, "--set")))
 
 
+#: a seed: any non-negative integer (numpy's seed sequences take no negative numbers)
+SEED = click.IntRange(min=0)
+
+
+def _positive_time(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
+    """Check a time limit option: a finite number of simulated seconds > 0."""
+    if value is not None and not (value > 0 and value < float("inf")):
+        raise click.BadParameter(f"{value} is not a time limit; expected a finite number of simulated seconds > 0")
+    return value
+
+
 _set_option = click.option("--set", "sets", multiple=True, metavar="KEY=VALUE", help="Override a mission value (params.X, world.seed, run.until …).")
 
 
@@ -76,9 +97,9 @@ def cli() -> None:
 
 @cli.command()
 @click.argument("mission", required=False, default=DEFAULT_MISSION)
-@click.option("--seed", type=int, help="World seed (default: the mission's world.seed).")
+@click.option("--seed", type=SEED, help="World seed, an integer >= 0 (default: the mission's world.seed).")
 @click.option("--log", "log_path", type=click.Path(dir_okay=False), help="Write the run to this MCAP file.")
-@click.option("--until", type=float, help="Time limit in simulated seconds.")
+@click.option("--until", type=float, callback=_positive_time, help="Time limit in simulated seconds (> 0).")
 @click.option("--gui", is_flag=True, help="Open the pybullet GUI (paced to real time).")
 @_set_option
 @click.option("--operator", is_flag=True, help="Read operator commands from stdin ('command [reason]' per line); real-time pace.")
@@ -141,36 +162,59 @@ def export(mission: str, fmt: str, output: str | None, sets: tuple[str, ...]) ->
 
 
 @cli.command()
-def skills() -> None:
-    """List installed skills and conditions with their parameters, types, defaults and docs."""
+@click.argument("names", nargs=-1)
+def skills(names: tuple[str, ...]) -> None:
+    """List installed skills and conditions (or only NAMES) with their parameters, types, defaults and docs."""
+    from .errors import one_of, suggest
     from .registry import GROUPS, Registry, installed
 
     console = Console()
     registry = Registry()
-    for kind in GROUPS:
-        for name, providers in installed(kind).items():
-            for provider in providers:
-                title = f"{kind} [bold]{name}[/]  from {provider.distribution}: {provider.target}"
-                table = Table(title=title, title_justify="left")
-                for column in ("parameter", "type", "default", "description"):
-                    table.add_column(column)
-                try:
-                    cls = registry.resolve(kind, name) if len(providers) == 1 else _load(provider.target)
-                except MissionError as err:
-                    console.print(f"{kind} {name} ({provider}): [red]{err}[/]")
-                    continue
-                doc = cls.summary()
-                kinds = "no robot" if not cls.uses_robot else ", ".join(cls.robot_kinds or ("any robot",))
-                table.caption = f"{doc} Robots: {kinds}." + (f" Primary: {cls.primary}." if getattr(cls, "primary", None) else "")
-                table.caption_justify = "left"
-                for field_name, info in cls.Params.model_fields.items():
-                    annotation = _type_text(info.annotation)
-                    default = "(required)" if info.is_required() else repr(info.default)
-                    table.add_row(field_name, annotation, default, info.description or "")
-                for port, keys in (("reads", cls.reads), ("writes", cls.writes)):
-                    if keys:
-                        table.add_row(f"[dim]{port}[/]", "blackboard", ", ".join(keys), "")
-                console.print(table)
+    available = {name: (kind, providers) for kind in GROUPS for name, providers in installed(kind).items()}
+    with bad_input():
+        for wanted in names:
+            if wanted not in available:
+                raise MissionError(f"unknown skill or condition '{wanted}'", expected=one_of(available), suggestion=suggest(wanted, available))
+    for name, (kind, providers) in available.items():
+        if names and name not in names:
+            continue
+        for provider in providers:
+            title = Text.assemble(f"{kind} ", (name, "bold"), f"  from {provider.distribution}: {provider.target}")
+            table = Table(title=title, title_justify="left")
+            for column in ("parameter", "type", "default", "description"):
+                table.add_column(column)
+            try:
+                cls = registry.resolve(kind, name) if len(providers) == 1 else _load(provider.target)
+            except MissionError as err:
+                console.print(Text.assemble(f"{kind} {name} ({provider}): ", (str(err), "red")))
+                continue
+            kinds = "no robot" if not cls.uses_robot else ", ".join(cls.robot_kinds or ("any robot",))
+            primary = f" Primary: {cls.primary}." if getattr(cls, "primary", None) else ""
+            table.caption = Text(f"{cls.summary()} Robots: {kinds}.{primary}")
+            table.caption_justify = "left"
+            for field_name, info in cls.Params.model_fields.items():
+                default = "(required)" if info.is_required() else repr(info.default)
+                table.add_row(*(Text(cell) for cell in (field_name, _type_text(info.annotation), default, info.description or "")))
+            for port, keys in (("reads", cls.reads), ("writes", cls.writes)):
+                if keys:
+                    table.add_row(Text(port, "dim"), "blackboard", Text(", ".join(keys)), "")
+            console.print(table)
+
+
+@cli.command()
+def missions() -> None:
+    """List the missions shipped with the package, with their descriptions."""
+    from .mission import known_missions, load_mission
+
+    table = Table(title="missions (marsupial run NAME)", title_justify="left")
+    for column in ("mission", "robots", "description"):
+        table.add_column(column)
+    for name in known_missions():
+        spec = load_mission(name).spec
+        robots = ", ".join(f"{member}: {m.robot}" for member, m in spec.team.items())
+        first_sentence = " ".join(spec.description.split()).split(". ")[0].rstrip(".")
+        table.add_row(Text(name, "bold"), Text(robots), Text(first_sentence + "."))
+    Console().print(table)
 
 
 def _type_text(annotation: Any) -> str:
@@ -202,6 +246,7 @@ def replay(log: str) -> None:
 
     with bad_input():
         run_log = read_log(log)
+        marsupial_metadata(run_log, log)
     meta = run_log.metadata
     click.echo(f"# {meta.get('mission_name', '?')} seed={meta.get('seed', '?')} outcome={run_log.outcome} "
                f"sim_time={run_log.sim_time}")
@@ -211,34 +256,34 @@ def replay(log: str) -> None:
 @cli.command()
 @click.argument("log", type=click.Path(dir_okay=False))
 def verify(log: str) -> None:
-    """Re-run the mission recorded in LOG (same text, seed, overrides, operator commands) and compare events."""
+    """Re-run the mission recorded in LOG (same text, subtrees, seed, overrides, operator commands) and compare events.
+
+    Works from the log alone: the mission and the subtree files it used are
+    stored in it, so neither the current folder nor the files on disk matter.
+    """
     from .mission import parse_mission
     from .operator import OperatorChannel
     from .replay import LogError, compare_events, read_log
     from .runner import run_mission
+    from .subtrees import write_mission_copy
 
-    with bad_input():
+    with bad_input(), tempfile.TemporaryDirectory(prefix="marsupial-verify-") as tmp:
         original = read_log(log)
-        meta = original.metadata
-        if "mission" not in meta:
-            raise LogError(f"{log}: no mission in the log's metadata: not a marsupial run log")
+        meta = marsupial_metadata(original, log)
         if original.outcome in ("interrupted", "terminated", "incomplete"):
             raise LogError(f"{log}: the run was {original.outcome}; only runs that ended by themselves can be verified")
-        path = Path(meta["mission_path"]) if meta.get("mission_path") else None
-        mission = parse_mission(
-            meta["mission"], str(path) if path else "<log>", json.loads(meta.get("overrides", "{}")),
-            path if path is not None and path.is_file() else None,
-        )
+        name = Path(meta["mission_path"]).stem if meta.get("mission_path") else meta.get("mission_name", "mission")
+        copy = write_mission_copy(Path(tmp) / "mission", name, meta["mission"], json.loads(meta.get("subtrees", "{}")))
+        mission = parse_mission(meta["mission"], str(copy), json.loads(meta.get("overrides", "{}")), copy)
         script = [(e.at, e.say, e.why) for e in mission.spec.operator]
         live = [(e["t"], e["command"], e.get("why", ""), e["source"])
                 for e in original.events_of("operator") if e["source"] != "script"]
-        with tempfile.TemporaryDirectory(prefix="marsupial-verify-") as tmp:
-            fresh_path = Path(tmp) / "verify.mcap"
-            run_mission(
-                mission, seed=int(meta["seed"]), log_path=fresh_path, until=json.loads(meta.get("until", "null")),
-                progress=False, operator=OperatorChannel(script + live),
-            )
-            differences = compare_events(original, read_log(fresh_path))
+        fresh_path = Path(tmp) / "verify.mcap"
+        run_mission(
+            mission, seed=int(meta["seed"]), log_path=fresh_path, until=json.loads(meta.get("until", "null")),
+            progress=False, operator=OperatorChannel(script + live),
+        )
+        differences = compare_events(original, read_log(fresh_path))
     if differences:
         click.echo(f"{log}: the re-run differs from the log ({len(differences)} lines):", err=True)
         click.echo("\n".join(differences[:60]), err=True)
@@ -249,14 +294,14 @@ def verify(log: str) -> None:
 @cli.command()
 @click.argument("mission")
 @click.option("--trials", type=click.IntRange(min=1), required=True, help="Trials per parameter combination.")
-@click.option("--seed", "base_seed", type=int, default=0, show_default=True, help="Seed of trial 0 (trial i: seed + i).")
+@click.option("--seed", "base_seed", type=SEED, default=0, show_default=True, help="Seed of trial 0, an integer >= 0 (trial i: seed + i).")
 @_set_option
 @click.option("--vary", multiple=True, metavar="KEY=V1,V2", help="Values to compare (cartesian product of all --vary).")
 @click.option("--workers", type=click.IntRange(min=1), help="Parallel trials (default: CPU count).")
 @click.option("--backend", type=click.Choice(["local", "ray"]), default="local", show_default=True)
 @click.option("--address", help="Ray cluster address (default: start a local Ray inside --out).")
 @click.option("--out", type=click.Path(file_okay=False), default="campaign", show_default=True)
-@click.option("--until", type=float, help="Time limit of each trial (simulated s).")
+@click.option("--until", type=float, callback=_positive_time, help="Time limit of each trial (simulated s, > 0).")
 @click.option("--logs", type=click.Choice(["failed", "all", "none"]), default="failed", show_default=True,
               help="Which trials keep their MCAP log.")
 def campaign(mission: str, trials: int, base_seed: int, sets: tuple[str, ...], vary: tuple[str, ...],
@@ -293,3 +338,7 @@ def campaign(mission: str, trials: int, base_seed: int, sets: tuple[str, ...], v
 def main(argv: list[str] | None = None) -> None:
     """Console-script entry point (``marsupial``)."""
     cli.main(args=argv, prog_name="marsupial")
+
+
+if __name__ == "__main__":
+    main()

@@ -126,3 +126,10 @@ class MissionErrors(MissionError):
         if more > 0:
             lines.append(f"… and {more} more error{'s' if more > 1 else ''}")
         return "\n".join(lines)
+
+
+def check_seed(seed: object, what: str = "seed") -> int:
+    """``seed`` if it is an integer >= 0 (numpy's seed sequences take no negatives); else a :class:`MissionError`."""
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise MissionError(f"{what} {seed!r} is not a seed", expected="an integer >= 0")
+    return seed

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import signal
 import sys
 import threading
@@ -51,7 +52,7 @@ from marsupial.world.scoring import Referee
 from marsupial.world.team_link import TeamLinkConfig
 
 from .compiler import CompiledTree, compile_mission
-from .errors import MissionError, one_of, suggest
+from .errors import MissionError, check_seed, one_of, suggest
 from .mission import Mission, load_mission
 from .operator import CONTROL_COMMANDS, OperatorChannel
 from .recorder import Recorder, Terminated
@@ -250,6 +251,7 @@ def _metadata(mission: Mission, seed: int, until: float | None) -> dict[str, Any
         "seed": seed,
         "overrides": json.dumps(mission.overrides),
         "until": json.dumps(until),
+        "subtrees": json.dumps(mission.subtree_texts),  # with the mission text, enough to re-run from the log alone
     }
 
 
@@ -286,7 +288,9 @@ def run_mission(
     if not isinstance(mission, Mission):
         mission = load_mission(mission, overrides)
     spec = mission.spec
-    seed = spec.world.seed if seed is None else int(seed)
+    seed = spec.world.seed if seed is None else check_seed(seed)
+    if until is not None and not (isinstance(until, (int, float)) and not isinstance(until, bool) and 0 < until < math.inf):
+        raise MissionError(f"until {until!r} is not a time limit", expected="a finite number of simulated seconds > 0")
     until = spec.run.until if until is None else float(until)
     channel = operator if operator is not None else OperatorChannel((e.at, e.say, e.why) for e in spec.operator)
     console = console or Console()
@@ -304,16 +308,18 @@ def run_mission(
         log.parent.mkdir(parents=True, exist_ok=True)
     recorder = Recorder(log, _metadata(mission, seed, until), record_images=record_images) if log else None
     context.recorder = recorder
+    if recorder is not None:
+        recorder.time_source = lambda: world.now  # the log ends at the time the run reached, however it ends
     world.add_actor(Referee(world, context))  # truth-based scores, world side: skills never read them
     display = _Progress(console, progress)
-    outcome, message, ticks = "failure", "", 0
+    outcome, message, ticks = "failure", "", _TickCount()
     started = time.perf_counter()
     try:
         with recorder if recorder is not None else contextlib.nullcontext(), _signals_end_the_run(recorder):
-            outcome, ticks = _loop(mission, tree, world, context, until, gui or operator_stdin, display, started)
+            outcome = _loop(mission, tree, world, context, until, gui or operator_stdin, display, started, ticks)
             if tree.root.status == Status.RUNNING:
                 tree.root.stop(Status.INVALID)  # skills still running leave their robots safe
-            context.event("run_end", outcome=outcome, sim_time=world.now, ticks=ticks)
+            context.event("run_end", outcome=outcome, sim_time=world.now, ticks=ticks.n)
     except KeyboardInterrupt:
         outcome = "interrupted"
     except Terminated:
@@ -327,7 +333,7 @@ def run_mission(
         outcome=outcome,
         seed=seed,
         sim_time=world.now,
-        ticks=ticks,
+        ticks=ticks.n,
         wall_time=time.perf_counter() - started,
         metrics=dict(context.metrics),
         robots={n: {"position": r.pose()[0].tolist(), "battery": battery_of(r)} for n, r in world.robots.items()},
@@ -338,6 +344,13 @@ def run_mission(
     if progress:
         console.print(summary_table(result))
     return result
+
+
+@dataclass
+class _TickCount:
+    """Tree ticks done so far (kept outside the loop, so a run that ends by an exception reports them too)."""
+
+    n: int = 0
 
 
 def _estimated_pose(robot: Any) -> tuple[Any, Any]:
@@ -355,8 +368,9 @@ def _loop(
     real_time: bool,
     display: _Progress,
     started: float,
-) -> tuple[str, int]:
-    """Tick until the root finishes, the time limit or an abort; returns (outcome, ticks).
+    ticks: _TickCount,
+) -> str:
+    """Tick until the root finishes, the time limit or an abort; returns the outcome (``ticks`` counts the ticks).
 
     ``real_time`` paces the loop to the wall clock (GUI or live operator: a
     person watches or types); the simulation itself never reads the clock.
@@ -369,7 +383,6 @@ def _loop(
         recorder.log_scene(world)
     next_metric = next_pose = 0.0
     paused = False
-    ticks = 0
     while True:
         now = world.now
         if recorder is not None and now + 1e-9 >= next_pose:
@@ -390,7 +403,7 @@ def _loop(
             if command.say not in CONTROL_COMMANDS and command.say not in tree.listens and recorder is not None:
                 recorder.log_text(now, "warning", f"no node listens to operator command '{command.say}'")
             if command.say == "abort":
-                return "aborted", ticks
+                return "aborted"
             if command.say == "pause" and not paused:
                 paused = True
                 arbiter.new_tick()
@@ -403,13 +416,13 @@ def _loop(
         if not paused:
             arbiter.new_tick()
             tree.root.tick_once()
-            ticks += 1
+            ticks.n += 1
             if recorder is not None:
                 recorder.log_tree(now, tree.root)
             if tree.root.status in (Status.SUCCESS, Status.FAILURE):
-                return ("success" if tree.root.status == Status.SUCCESS else "failure"), ticks
+                return "success" if tree.root.status == Status.SUCCESS else "failure"
         if until is not None and now + 1e-9 >= until:
-            return "time_limit", ticks
+            return "time_limit"
         world.step(period)
         wall = time.perf_counter() - started
         if real_time and world.now > wall:

@@ -26,13 +26,14 @@ implements :meth:`Condition.check` and never returns RUNNING.
 
 from __future__ import annotations
 
+import typing
 from collections.abc import Iterator
 from dataclasses import InitVar, dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import py_trees
 from py_trees.common import Access, Status
-from pydantic import BaseModel, ConfigDict
+from pydantic import BaseModel, ConfigDict, model_validator
 
 from .arbitration import Arbiter, CommandPort, Stamp
 
@@ -48,10 +49,34 @@ if TYPE_CHECKING:
 _STATUSES = frozenset(Status)
 
 
-class NodeParams(BaseModel):
-    """Base of every node's ``Params``: unknown keys are errors, attribute docstrings are the docs."""
+def _tuple_field(annotation: Any) -> bool:
+    """Whether a field's annotation is a tuple (or an optional tuple)."""
+    if typing.get_origin(annotation) is tuple:
+        return True
+    return any(typing.get_origin(arg) is tuple for arg in typing.get_args(annotation))
 
-    model_config = ConfigDict(extra="forbid", use_attribute_docstrings=True, frozen=True)
+
+class NodeParams(BaseModel):
+    """Base of every node's ``Params``: unknown keys are errors, attribute docstrings are the docs.
+
+    Values are checked strictly: a boolean or a string is not a number
+    (``seconds: true`` and ``seconds: '2'`` are errors, not 1.0 and 2.0), and
+    numbers are finite (NaN and infinities are refused). YAML lists are
+    accepted for tuple parameters.
+    """
+
+    model_config = ConfigDict(extra="forbid", use_attribute_docstrings=True, frozen=True, strict=True, allow_inf_nan=False)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _lists_for_tuples(cls, data: Any) -> Any:
+        if not isinstance(data, dict):
+            return data
+        fields = cls.model_fields
+        return {
+            key: tuple(value) if isinstance(value, list) and key in fields and _tuple_field(fields[key].annotation) else value
+            for key, value in data.items()
+        }
 
 
 @dataclass
@@ -210,9 +235,11 @@ class MissionNode(py_trees.behaviour.Behaviour):
         if self.status != Status.RUNNING:
             self.initialise()
         new_status = self.update()
-        if new_status not in _STATUSES:
-            self.logger.error(f"A behaviour returned an invalid status, setting to INVALID [{new_status}][{self.name}]")
-            new_status = Status.INVALID
+        if new_status not in _STATUSES:  # a plug-in bug: end the run with an error naming the node, once
+            raise TypeError(
+                f"{type(self).__name__} '{self.name}' returned {new_status!r} from its tick; "
+                "expected a py_trees Status (RUNNING, SUCCESS or FAILURE)"
+            )
         if new_status != Status.RUNNING:
             self.stop(new_status)
         self.status = new_status

@@ -16,10 +16,16 @@ whole string is the reference, formatted into the text otherwise (``$$`` is a
 literal ``$``). Inside a subtree, names are the subtree's parameters, then the
 mission's ``params``. Include cycles are an error naming the cycle and the
 include line.
+
+Subtree files are read only from inside the mission's folder and the
+package's ``missions/`` folder, or from the folders listed in the
+environment variable ``MARSUPIAL_SUBTREE_PATH`` (separated like ``PATH``):
+a mission cannot make the loader read ``../../../etc/passwd``.
 """
 
 from __future__ import annotations
 
+import os
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -132,6 +138,16 @@ def find_subtree(ref: str, search_dirs: list[Path], base_dir: Path | None) -> Pa
     return next((d / f"{ref}.yaml" for d in search_dirs if (d / f"{ref}.yaml").is_file()), None)
 
 
+SEARCH_PATH_VARIABLE = "MARSUPIAL_SUBTREE_PATH"
+
+
+def allowed_roots(mission_file: Path | None) -> list[Path]:
+    """Folders subtree files may come from: the mission's folder, the package's missions, ``$MARSUPIAL_SUBTREE_PATH``."""
+    base = mission_file.resolve().parent if mission_file is not None else Path.cwd().resolve()
+    extra = [Path(p).resolve() for p in os.environ.get(SEARCH_PATH_VARIABLE, "").split(os.pathsep) if p]
+    return [base, mission_dir().resolve(), *extra]
+
+
 @dataclass(frozen=True)
 class _Include:
     """One link of the include chain: subtree name, its resolved file, where it was included."""
@@ -177,6 +193,12 @@ class _Expander:
                 suggestion=suggest(node.subtree, known),
             )
         file = file.resolve()
+        roots = allowed_roots(self.mission.path)
+        if not any(root == file.parent or root in file.parents for root in roots):
+            raise self.mission.error_at(
+                ref_at, f"subtree '{node.subtree}' is outside the mission's folder",
+                expected=f"a subtree inside {roots[0]} or the package's missions (or add its folder to ${SEARCH_PATH_VARIABLE})",
+            )
         link = _Include(node.subtree, file, source.where(ref_at))
         if any(c.file == file for c in chain):
             cycle = " -> ".join([c.name for c in chain[[c.file for c in chain].index(file):]] + [node.subtree])
@@ -247,5 +269,38 @@ def expand_subtrees(mission: Mission) -> Mission:
     undeclared or missing parameters, unknown ``${name}`` references and
     include cycles raise a :class:`MissionError` at the include.
     """
-    mission.spec.tree = _Expander(mission).expand(mission.spec.tree, ())
+    expander = _Expander(mission)
+    mission.spec.tree = expander.expand(mission.spec.tree, ())
+    mission.subtree_texts = {subtree_key(path, mission.path): sub.source.text for path, sub in expander.files.items()}
     return mission
+
+
+def subtree_key(file: Path, mission_file: Path | None) -> str:
+    """Where a subtree file sits for a copy of the mission (a run log): relative to the mission's folder.
+
+    Files of the package's missions (``missions/subtrees/x.yaml``) become
+    ``subtrees/x.yaml``, which the copy's own ``subtrees/`` folder serves
+    first; files from ``$MARSUPIAL_SUBTREE_PATH`` keep their name under
+    ``subtrees/``.
+    """
+    for root in allowed_roots(mission_file):
+        if root in file.parents:
+            return file.relative_to(root).as_posix()
+    return f"subtrees/{file.name}"
+
+
+def write_mission_copy(folder: Path, mission_name: str, text: str, subtree_texts: Mapping[str, str]) -> Path:
+    """Write a mission and its subtree files (:func:`subtree_key` layout) under ``folder``; returns the mission file.
+
+    Keys that would leave ``folder`` (absolute, or with ``..``) are refused with a :class:`MissionError`.
+    """
+    mission_file = folder / f"{Path(mission_name).name or 'mission'}.yaml"
+    mission_file.write_text(text)
+    for key, body in subtree_texts.items():
+        relative = Path(key)
+        if relative.is_absolute() or ".." in relative.parts:
+            raise MissionError(f"subtree file '{key}' of the log would be written outside the copy", expected="a relative path")
+        target = folder / relative
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_text(body)
+    return mission_file

@@ -8,6 +8,11 @@ compiler — can name the exact place in the file.
 Scalars follow YAML 1.2 where YAML 1.1 surprises: only ``true``/``false`` are
 booleans (``yes``, ``no``, ``on``, ``off`` stay strings, so ``{operator: no}``
 means the command "no"), and ``1e3`` is a float.
+
+Hostile documents are refused with a located error, not a hang or a
+traceback: at most :data:`MAX_VALUES` values after alias expansion (a
+"billion laughs" document multiplies a few aliases into billions) and at most
+:data:`MAX_DEPTH` levels of nesting.
 """
 
 from __future__ import annotations
@@ -21,6 +26,9 @@ import yaml
 from .errors import KeyPathLike, MissionError
 
 Position = tuple[int, int]
+
+MAX_VALUES = 100_000  # values (scalars, mappings, lists) of one document after alias expansion
+MAX_DEPTH = 64  # levels of nested mappings and lists
 
 _BOOL_TAG = "tag:yaml.org,2002:bool"
 _FLOAT_TAG = "tag:yaml.org,2002:float"
@@ -93,8 +101,19 @@ def _parse_error(exc: yaml.YAMLError, file: str) -> MissionError:
     return MissionError(message, file, line, column)
 
 
-def _build(loader: _Loader, node: yaml.Node, path: tuple, doc: SourceDoc) -> Any:
-    """Plain value of ``node``, recording positions under ``path``; duplicate keys are errors."""
+def _build(loader: _Loader, node: yaml.Node, path: tuple, doc: SourceDoc, budget: list[int]) -> Any:
+    """Plain value of ``node``, recording positions under ``path``; duplicate keys are errors.
+
+    ``budget`` holds the number of values still allowed (:data:`MAX_VALUES`, shared by the whole document).
+    """
+    budget[0] -= 1
+    if budget[0] < 0 or len(path) > MAX_DEPTH:
+        line, column = _position(node.start_mark)
+        what = f"more than {MAX_VALUES:,} values after alias expansion" if budget[0] < 0 else f"nested deeper than {MAX_DEPTH} levels"
+        raise MissionError(
+            f"document too large: {what}", doc.file, line, column, path,
+            expected=f"at most {MAX_VALUES:,} values and {MAX_DEPTH} levels (a mission needs far fewer)",
+        )
     if isinstance(node, yaml.MappingNode):
         seen: dict[Any, yaml.Node] = {}
         for key_node, _ in node.value:
@@ -116,13 +135,13 @@ def _build(loader: _Loader, node: yaml.Node, path: tuple, doc: SourceDoc) -> Any
                 line, column = _position(key_node.start_mark)
                 raise MissionError("a mapping key must be a scalar", doc.file, line, column, path, expected="a name")
             doc.positions[path + (key,)] = _position(key_node.start_mark)
-            result[key] = _build(loader, value_node, path + (key,), doc)
+            result[key] = _build(loader, value_node, path + (key,), doc, budget)
         return result
     if isinstance(node, yaml.SequenceNode):
         items = []
         for index, item in enumerate(node.value):
             doc.positions[path + (index,)] = _position(item.start_mark)
-            items.append(_build(loader, item, path + (index,), doc))
+            items.append(_build(loader, item, path + (index,), doc, budget))
         return items
     return loader.construct_object(node, deep=True)
 
@@ -135,9 +154,14 @@ def load_yaml(text: str, file: str = "<string>") -> SourceDoc:
         root = loader.get_single_node()
         if root is not None:
             doc.positions[()] = _position(root.start_mark)
-            doc.data = _build(loader, root, (), doc)
+            doc.data = _build(loader, root, (), doc, [MAX_VALUES])
     except yaml.YAMLError as exc:
         raise _parse_error(exc, doc.file) from None
+    except RecursionError:  # the YAML composer recurses per nesting level
+        raise MissionError(
+            f"document too large: nested deeper than {MAX_DEPTH} levels", doc.file, None, None,
+            expected=f"at most {MAX_DEPTH} levels of nesting",
+        ) from None
     finally:
         loader.dispose()
     return doc

@@ -33,6 +33,7 @@ from marsupial.geometry import quaternion_from_matrix, rotation_matrix
 
 from .estimation.base import StateEstimate
 from .sensors.base import Reading
+from .sensors.lidar import Lidar
 
 if TYPE_CHECKING:
     from .robots.base import Robot
@@ -74,6 +75,30 @@ class CameraImage:
     K: np.ndarray
 
 
+@dataclass(frozen=True)
+class RangeScan:
+    """A 2-D LiDAR scan as the robot receives it: ranges and beam angles in the sensor frame, no pose.
+
+    Attributes:
+        ranges: ``(n,)`` float32 distances (m) along each beam; ``inf`` where no echo.
+        angles: ``(n,)`` float32 beam angles (rad), counter-clockwise from the sensor's +x axis.
+        max_range: farthest possible echo (m).
+
+    World points need the robot's estimate composed with the sensor's mount
+    (``Onboard.link_offset("lidar")``), not the simulator's sensor pose.
+    """
+
+    ranges: np.ndarray
+    angles: np.ndarray
+    max_range: float
+
+    def points_sensor(self) -> np.ndarray:
+        """``(m, 2)`` x, y (m, sensor frame) of the beams that returned an echo."""
+        hit = np.isfinite(self.ranges)
+        r, a = self.ranges[hit], self.angles[hit]
+        return np.stack((r * np.cos(a), r * np.sin(a)), axis=1)
+
+
 #: static facts of a sensor that a skill may read (its datasheet and mount), by attribute name
 SENSOR_FACTS = frozenset(
     {
@@ -86,24 +111,32 @@ class SensorPort:
     """One sensor as the robot's computer reads it: :meth:`read` and its static facts (:data:`SENSOR_FACTS`).
 
     Camera readings come as :class:`CameraImage` (no true pose, no
-    segmentation); the others as the sensor's own data type.
+    segmentation, depth only from a camera that ``measures_depth``), LiDAR
+    scans as :class:`RangeScan` (no true pose, no body ids); the others as
+    the sensor's own data type.
     """
 
-    __slots__ = ("name", "__sensor", "__image", "__depth")
+    __slots__ = ("name", "__sensor", "__image", "__scan", "__depth")
 
     def __init__(self, name: str, sensor: Sensor[Any], depth: bool = True):
         self.name = name
         self.__sensor = sensor
         self.__image = hasattr(sensor, "intrinsics")
+        self.__scan = isinstance(sensor, Lidar)
         self.__depth = depth
 
     def read(self) -> Reading[Any] | None:
         """The newest readable sample (``None`` before the first); its ``stamp`` is the sample's sim time (s)."""
         reading = self.__sensor.read()
-        if reading is None or not self.__image:
-            return reading
-        frame = reading.data
-        return Reading(reading.stamp, CameraImage(frame.rgb, frame.depth if self.__depth else None, frame.K))
+        if reading is None:
+            return None
+        if self.__image:
+            frame = reading.data
+            return Reading(reading.stamp, CameraImage(frame.rgb, frame.depth if self.__depth else None, frame.K))
+        if self.__scan:
+            scan = reading.data
+            return Reading(reading.stamp, RangeScan(scan.ranges, scan.angles, scan.max_range))
+        return reading
 
     def __getattr__(self, name: str) -> Any:
         if name in SENSOR_FACTS:

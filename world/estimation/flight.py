@@ -51,6 +51,9 @@ if TYPE_CHECKING:
     from ..world import World
 
 
+REST_DECIMATION = 4  # at rest the filter runs every 4th autopilot update (30 Hz)
+
+
 @dataclass(frozen=True)
 class FlightEstimatorGains:
     """Gains of the complementary filter (chosen; see ``docs/world.md``).
@@ -131,12 +134,11 @@ class FlightEstimator(Estimator):
         self._last = {"flow": -1.0, "sonar": -1.0, "baro": -1.0}
         self._baro_offset: float | None = None  # m, navigation z minus barometer reading
         self._baro_n = 0  # samples in the offset's running mean
-        self._w = (0.0, 0.0, 0.0)
-        self._q_imu = self._q = (0.0, 0.0, 0.0, 1.0)
         self._cache: StateEstimate | None = None
-        self._f, self._w, self._q_imu = self.imu.sample()
+        self._rest_calls = -1
+        _, self._w, self._q_imu = self.imu.sample()
         self.reset(np.asarray(position, dtype=float), float(yaw))
-        self.resets = 0
+        self.resets = 0  # the start pose is not a hand-over
 
     # ------------------------------------------------------------- interface
     def reset(self, position: np.ndarray, yaw: float) -> None:
@@ -148,19 +150,33 @@ class FlightEstimator(Estimator):
         self._set_attitude(self._q_imu)
         self._baro_offset = None
         self.resets += 1
+        self._stamp = self.clock.now
         self._cache = None
 
     def estimate(self) -> StateEstimate:
         """The latest estimate (frame ``"odom"``)."""
         if self._cache is None:
             self._cache = StateEstimate(
-                self.clock.now, self.frame, np.array(self.p), np.array(self._q), np.array(self.v), np.array(self._w), self.source
+                self._stamp, self.frame, np.array(self.p), np.array(self._q), np.array(self.v), np.array(self._w),
+                self.source,
             )
         return self._cache
 
     def update(self, dt: float, at_rest: bool = False) -> None:
-        """One filter step of ``dt`` s: IMU propagation, then the flow, sonar and barometer samples that are new."""
+        """One filter step of ``dt`` s: IMU propagation, then the flow, sonar and barometer samples that are new.
+
+        At rest (motors off or docked) only every ``REST_DECIMATION``-th call does anything: the
+        velocity is zero, the position held, and the attitude (a carried vehicle turns with its
+        carrier) and the barometer offset follow at a quarter of the rate.
+        """
+        if at_rest:
+            self._rest_calls += 1
+            if self._rest_calls % REST_DECIMATION:
+                return
+        else:
+            self._rest_calls = -1  # the first call at rest runs
         self._cache = None
+        self._stamp = self.clock.now
         f, self._w, q_imu = self.imu.sample()
         self._q_imu = q_imu
         self._set_attitude(q_imu)

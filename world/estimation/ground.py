@@ -13,6 +13,8 @@ Slip, scrub in turns and lateral drift move the body but not the wheels,
 so the estimate drifts with distance (UMBmark, Borenstein & Feng 1996:
 systematic errors from wheel-diameter and wheelbase uncertainty, non-
 systematic ones from slip). It is planar: z stays at the start height.
+While the wheels stand (the drive's speed and yaw rate both zero) nothing
+is integrated: the controller trusts its encoders at rest.
 
 :class:`MapLocalization` (frame ``"map"``) is an AMCL-like localiser against
 the mission's declared map: at ``fix_hz`` it outputs the true footprint pose
@@ -119,6 +121,7 @@ class WheelOdometry(Estimator):
     def reset(self, position: np.ndarray, yaw: float) -> None:
         """Restart at ``position`` (x, y used; m) with heading ``yaw`` (rad)."""
         self.x, self.y, self.yaw = float(position[0]), float(position[1]), float(yaw)
+        self.stamp = self.clock.now
         self._cache: StateEstimate | None = None
 
     def update(self, dt: float) -> None:
@@ -128,6 +131,11 @@ class WheelOdometry(Estimator):
             return
         self._phase = 0
         r = self.robot
+        self.stamp = self.clock.now
+        self._cache = None
+        if r.diff_drive.v == 0.0 and r.diff_drive.omega == 0.0:  # the wheels stand: no encoder ticks, no motion
+            self.speed = self.yaw_rate = 0.0
+            return
         v = r.diff_drive.v * self.encoder_scale  # what the wheels turn (before slip)
         w = r.true_yaw_rate() * self.gyro_scale + self.gyro_bias
         if self.encoder_noise > 0.0 or self.gyro_noise > 0.0:
@@ -140,13 +148,12 @@ class WheelOdometry(Estimator):
         self.y += v * T * math.sin(yaw_mid)
         self.yaw += w * T
         self.speed, self.yaw_rate = v, w
-        self._cache = None
 
     def estimate(self) -> StateEstimate:
         """The dead-reckoned footprint pose (frame ``"odom"``)."""
         if self._cache is None:
             self._cache = _planar_estimate(
-                self.clock.now, self.frame, self.x, self.y, self.z, self.yaw, self.speed, self.yaw_rate, self.source
+                self.stamp, self.frame, self.x, self.y, self.z, self.yaw, self.speed, self.yaw_rate, self.source
             )
         return self._cache
 
@@ -181,12 +188,14 @@ class MapLocalization(Estimator):
         self._fix_pose = (float(p[0]) + ex, float(p[1]) + ey, float(p[2]), yaw_of(q) + eyaw)
         o = self.odometry
         self._odom_at_fix = (o.x, o.y, o.yaw)
+        self._fix_stamp = self.clock.now
 
     def reset(self, position: np.ndarray, yaw: float) -> None:
         """Take ``position``/``yaw`` as the pose until the next map fix (the map frame itself stays)."""
         o = self.odometry
         self._fix_pose = (float(position[0]), float(position[1]), float(position[2]), float(yaw))
         self._odom_at_fix = (o.x, o.y, o.yaw)
+        self._fix_stamp = self.clock.now
         self._cache = None
 
     def update(self, dt: float) -> None:
@@ -209,9 +218,9 @@ class MapLocalization(Estimator):
             lx, ly = c0 * dx + s0 * dy, -s0 * dx + c0 * dy  # increment in the odometry frame at the fix
             c, s = math.cos(fyaw), math.sin(fyaw)
             yaw = fyaw + o.yaw - oyaw
-            self._cache = _planar_estimate(
-                self.clock.now, self.frame, fx + c * lx - s * ly, fy + s * lx + c * ly, fz, yaw, o.speed, o.yaw_rate, self.source
-            )
+            x, y = fx + c * lx - s * ly, fy + s * lx + c * ly
+            stamp = max(o.stamp, self._fix_stamp)
+            self._cache = _planar_estimate(stamp, self.frame, x, y, fz, yaw, o.speed, o.yaw_rate, self.source)
         return self._cache
 
 

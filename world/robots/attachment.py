@@ -48,7 +48,11 @@ def set_collisions(
 
 
 def place_link_at(robot: Robot, link: str, position: Sequence[float], orientation: Sequence[float]) -> None:
-    """Teleport ``robot`` at rest so that its ``link`` frame lands on the given world pose (m, [x, y, z, w])."""
+    """Teleport ``robot`` at rest so that its ``link`` frame lands on the given world pose (m, [x, y, z, w]).
+
+    Scene set-up only (a robot that starts the run stored): its onboard
+    estimate restarts there, as if it had been spawned there.
+    """
     cid = robot.cid
     p_base, q_base = pybullet.getBasePositionAndOrientation(robot.body_id, physicsClientId=cid)
     p_link, q_link = robot.link_pose(link)
@@ -58,3 +62,4 @@ def place_link_at(robot: Robot, link: str, position: Sequence[float], orientatio
     p_new, q_new = pybullet.multiplyTransforms(list(position), list(orientation), p_link_base, q_link_base)
     pybullet.resetBasePositionAndOrientation(robot.body_id, p_new, q_new, physicsClientId=cid)
     pybullet.resetBaseVelocity(robot.body_id, (0, 0, 0), (0, 0, 0), physicsClientId=cid)
+    robot.restart_estimate()

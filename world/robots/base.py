@@ -15,7 +15,7 @@ import numpy as np
 import pybullet
 
 from ..assets import asset_path
-from marsupial.geometry import yaw_of  # noqa: F401  (re-exported for the robot modules)
+from marsupial.geometry import yaw_of  # (also re-exported for the robot modules)
 
 from ..errors import UnknownNameError
 from ..onboard import Onboard, base_frame_offset
@@ -129,6 +129,21 @@ class Robot:
         p, q = pybullet.getBasePositionAndOrientation(self.body_id, physicsClientId=self.cid)
         v, w = pybullet.getBaseVelocity(self.body_id, physicsClientId=self.cid)
         return p, q, v, w
+
+    def restart_estimate(self) -> None:
+        """Scene set-up only (a robot placed where the run starts it): restart its estimate at the true pose there.
+
+        The mission declares where a robot starts, so this is its declared start
+        pose, as at spawning; robots without an estimator (test rigs) are left alone.
+        """
+        estimator = getattr(self, "estimator", None)
+        if estimator is not None:
+            p, q = self.estimate_frame_pose()
+            estimator.reset(p, yaw_of(q))
+
+    def estimate_frame_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """True pose of the frame the estimator estimates (the base; ground robots: ``base_footprint``)."""
+        return self.pose()
 
     def link_pose(self, link: str | int) -> tuple[np.ndarray, np.ndarray]:
         """World pose of a link frame (URDF link frame, not its inertial frame)."""

@@ -56,6 +56,7 @@ from .arm import ArmController
 from .attachment import set_collisions, weld
 from .base import Robot, yaw_of
 from ..estimation.ground import SKID_STEER_ODOMETRY
+from ..onboard import simulates_hardware
 from .diff_drive import DiffDriveLimits
 from .encoders import JointEncoders
 from .wheeled import WheeledRobot
@@ -214,6 +215,7 @@ class LaunchingApparatus:
         p_mav = p_seat + np.array([0.0, 0.0, mav.spec.landed_height])  # type: ignore[attr-defined]
         pybullet.resetBasePositionAndOrientation(mav.body_id, p_mav, q_seat, physicsClientId=self.cid)
         pybullet.resetBaseVelocity(mav.body_id, (0, 0, 0), (0, 0, 0), physicsClientId=self.cid)
+        mav.restart_estimate()  # set-up: the MAV starts the run in the cradle
         self.mav = mav
         self.secure_mav()
 
@@ -360,6 +362,7 @@ class MMS(WheeledRobot):
         """Arm joint angles now (rad), ``arm_joint_1`` … ``arm_joint_6``."""
         return self.arm.positions()
 
+    @simulates_hardware
     def arm_encoders(self) -> np.ndarray:
         """Arm joint angles as the joint encoders read them (rad; 12-bit encoders, :mod:`.encoders`)."""
         return self.encoders.read(self.arm.positions())

@@ -92,7 +92,10 @@ class SonarMount:
 
 @dataclass(frozen=True)
 class FlowMount:
-    """Downward optical flow (at the sonar's origin): noise growth with range ((m/s)/m), 1σ scale error, nearest valid range (m)."""
+    """Downward optical flow at the sonar's origin (figures before ``noise_scale``; see docs/world.md).
+
+    Noise growth with range ((m/s)/m), 1σ scale error, nearest valid range (m), slow bias (m/s, s).
+    """
 
     noise_per_m: float = 0.02  # chosen, see docs/world.md (order of PX4Flow's errors, Honegger et al. 2013)
     scale_std: float = 0.03  # chosen: lens and range calibration

@@ -94,7 +94,9 @@ class WheeledRobot(Robot):
         self.diff_drive = DiffDrive(world, self.body_id, self.limits, f"{name}/drive")
         p0, q0 = self.footprint_pose()  # the start pose the mission declares
         self.odometry = WheelOdometry(self, p0, yaw_of(q0), self.odometry_errors)
-        self.estimator = self.odometry if localization == "odometry" else MapLocalization(self, self.odometry, self.map_errors)
+        self.estimator = (
+            self.odometry if localization == "odometry" else MapLocalization(self, self.odometry, self.map_errors)
+        )
 
     # ------------------------------------------------------------ commands
     def drive(self, v: float, omega: float) -> None:
@@ -128,6 +130,10 @@ class WheeledRobot(Robot):
     def footprint_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """World pose of ``base_footprint`` (the base projected on the ground)."""
         return self.link_pose("base_footprint")
+
+    def estimate_frame_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """True pose of ``base_footprint``, the frame the odometry estimates."""
+        return self.footprint_pose()
 
     def state(self) -> dict[str, Any]:
         """Pose plus measured forward speed (m/s), yaw rate (rad/s) and the commanded v, omega."""

@@ -4,10 +4,15 @@ The device tracks the texture under a downward camera and scales the image
 flow by its range to the surface, so what it measures is the vehicle's
 velocity *relative to the surface under the camera*: over a moving
 platform it reads the velocity relative to the platform. It is modelled by
-one ray along the body's -z axis from the camera: the body (and link) hit,
-its pybullet velocity at the hit point, and the vehicle's velocity give the
-relative velocity, expressed in the heading frame (x forward, y left,
-horizontal: the firmware derotates the flow with the gyro and the attitude).
+five rays from the camera, one along the body's -z axis and four towards
+the corners of a square field of half-angle ``FLOW_HALF_ANGLE``: for each,
+the body (and link) hit and its pybullet velocity at the hit point give
+the vehicle's velocity relative to that point of the surface; the device
+reports the per-axis median of the rays that hit (the texture that fills
+most of the view wins: a small platform far below hardly moves the flow,
+a platform filling the view carries it), in the heading frame (x forward,
+y left, horizontal: the firmware derotates the flow with the gyro and the
+attitude). Fewer than three hits: invalid.
 
 Errors (scaled by ``world.noise_scale``; sources in ``docs/world.md``):
 white noise of 1σ ``config.noise_std + noise_per_m · range`` (m/s per axis:
@@ -34,6 +39,9 @@ if TYPE_CHECKING:
     from ..robots.base import Robot
 
 
+FLOW_HALF_ANGLE = math.radians(15.0)  # rad, the part of the vertical camera's view the flow is measured in (chosen)
+
+
 @dataclass(frozen=True)
 class FlowData:
     """One optical-flow sample.
@@ -41,7 +49,7 @@ class FlowData:
     Attributes:
         valid: False when no surface is in range (the velocity is then 0).
         vx, vy: velocity relative to the surface (m/s), heading frame (x forward, y left).
-        range: distance (m) to the surface along the camera axis the device scaled the flow by (``inf`` if none).
+        range: median depth (m) of the surface along the camera axis, by which the device scaled the flow (``inf`` if none).
     """
 
     valid: bool
@@ -81,6 +89,10 @@ class OpticalFlow(Sensor[FlowData]):
         self.max_range = max_range
         self.offset = tuple(float(v) for v in offset)
         self._static: set[int] = set()  # static bodies of this world seen under the camera
+        # ray ends (base frame, relative to the origin) reaching max_range vertically below the camera
+        t = math.tan(FLOW_HALF_ANGLE)
+        directions = [(0.0, 0.0, -1.0)] + [(sx * t, sy * t, -1.0) for sx in (-1.0, 1.0) for sy in (-1.0, 1.0)]
+        self._rays = [(dx * max_range, dy * max_range, dz * max_range) for dx, dy, dz in directions]
         self.bias_std, self.bias_tau = bias_std * self.noise_scale, bias_tau
         self.bias = [self.bias_std * float(b) for b in self.rng.standard_normal(2)]  # stationary start
         self._t_bias = robot.world.now
@@ -100,25 +112,33 @@ class OpticalFlow(Sensor[FlowData]):
         cid, own = self.world.client_id, self.robot.body_id
         p, q, v, _ = self.robot.base_state()
         x, y, z, w = q
-        # body axes in the world frame: columns of R_world_body
-        r00, r10 = 1 - 2 * (y * y + z * z), 2 * (x * y + w * z)
-        r02, r12, r22 = 2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)
-        r01, r11, r21, r20 = 2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x), 2 * (x * z - w * y)
+        r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)  # R_world_body
+        r10, r11, r12 = 2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)
+        r20, r21, r22 = 2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)
         ox, oy, oz = self.offset
         origin = (
             p[0] + r00 * ox + r01 * oy + r02 * oz,
             p[1] + r10 * ox + r11 * oy + r12 * oz,
             p[2] + r20 * ox + r21 * oy + r22 * oz,
         )
-        L = self.max_range
-        end = (origin[0] - r02 * L, origin[1] - r12 * L, origin[2] - r22 * L)
-        hits = pybullet.rayTestBatch([origin], [end], physicsClientId=cid)
-        body, link, fraction, hit = hits[0][0], hits[0][1], hits[0][2], hits[0][3]
-        distance = fraction * L
-        if body < 0 or body == own or distance < self.min_range:
+        ends = [
+            (origin[0] + r00 * dx + r01 * dy + r02 * dz, origin[1] + r10 * dx + r11 * dy + r12 * dz,
+             origin[2] + r20 * dx + r21 * dy + r22 * dz)
+            for dx, dy, dz in self._rays
+        ]
+        hits = pybullet.rayTestBatch([origin] * len(ends), ends, physicsClientId=cid)
+        rel_x, rel_y, ranges = [], [], []
+        for body, link, fraction, point, _ in hits:
+            distance = fraction * self.max_range  # along the camera axis (every ray reaches max_range in depth)
+            if body < 0 or body == own or distance < self.min_range:
+                continue
+            sx, sy = _surface_velocity(body, link, point, cid, self._static)
+            rel_x.append(v[0] - sx)
+            rel_y.append(v[1] - sy)
+            ranges.append(distance)
+        if len(ranges) < 3:
             return FlowData(False, 0.0, 0.0, math.inf)
-        sx, sy = _surface_velocity(body, link, hit, cid, self._static)
-        dvx, dvy = v[0] - sx, v[1] - sy
+        dvx, dvy, distance = _median(rel_x), _median(rel_y), _median(ranges)
         yaw = math.atan2(r10, r00)
         c, s = math.cos(yaw), math.sin(yaw)
         self._advance_bias()
@@ -129,6 +149,13 @@ class OpticalFlow(Sensor[FlowData]):
             n0, n1 = self.normals.take(2)
             vx, vy = vx + std * n0, vy + std * n1
         return FlowData(True, vx, vy, distance)
+
+
+def _median(values: list[float]) -> float:
+    """Median of 3–5 values."""
+    ordered = sorted(values)
+    n = len(ordered)
+    return ordered[n // 2] if n % 2 else 0.5 * (ordered[n // 2 - 1] + ordered[n // 2])
 
 
 def _surface_velocity(

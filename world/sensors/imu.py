@@ -130,6 +130,7 @@ class Imu(Sensor[ImuData]):
         # roll/pitch errors start from their stationary distribution; the heading error from 0
         self._att_err = [float(draw[6]) * self._att_std, float(draw[7]) * self._att_std, 0.0]
         self._t_err = robot.world.now
+        self._ou_dt, self._ou = -1.0, (1.0, 0.0)
 
     def _advance_errors(self, now: float) -> None:
         """Propagate the attitude error to ``now`` (exact OU discretisation: e ← e·φ + σ√(1-φ²)·n)."""
@@ -137,8 +138,10 @@ class Imu(Sensor[ImuData]):
         self._t_err = now
         e = self._att_err
         if self._att_std > 0.0:
-            phi = math.exp(-dt / self._att_tau)
-            s = self._att_std * math.sqrt(1.0 - phi * phi)
+            if dt != self._ou_dt:  # φ and the step σ of the last interval are reused (the autopilot's is fixed)
+                phi = math.exp(-dt / self._att_tau)
+                self._ou_dt, self._ou = dt, (phi, self._att_std * math.sqrt(1.0 - phi * phi))
+            phi, s = self._ou
             n0, n1 = self.normals.take(2)
             e[0] = e[0] * phi + s * n0
             e[1] = e[1] * phi + s * n1
