@@ -6,7 +6,9 @@ sensors, the recorder and scoring) plus an onboard interface, built here:
 
 - sensor readings (:class:`SensorPort`: camera images without their true
   pose, depth, LiDAR scans, sonar, IMU, barometer, battery monitor);
-- the robot's state estimate (:class:`~marsupial.world.estimation.StateEstimate`);
+- the robot's state estimate (:class:`~marsupial.world.estimation.StateEstimate`), and the
+  message with which a team member corrects a UAV's
+  (:class:`~marsupial.world.estimation.external.VisionFix`, on the team link);
 - the states its devices report (motor arming, docking switches, magnet,
   lift encoder) and its joint and wheel encoders;
 - its command inputs (the names in :attr:`Onboard.commands`);
@@ -32,6 +34,7 @@ import numpy as np
 from marsupial.geometry import quaternion_from_matrix, rotation_matrix
 
 from .estimation.base import StateEstimate
+from .estimation.external import VisionFix, vision_fix_topic  # noqa: F401 (the message a team member sends a UAV's estimator)
 from .sensors.base import Reading
 from .sensors.lidar import Lidar
 

@@ -20,6 +20,19 @@ the frame's stamp is compared with the measurement and ``C`` moves toward
 it by a gain; a measurement too far from the prediction is an outlier. Only
 the drift since the last frame adds to the error while the marker is hidden.
 
+External vision fix: each frame accepted by the filter is also sent to the
+UAV over the team link (:class:`~marsupial.world.onboard.VisionFix` on
+``<uav>/vision_fix``): the UAV base's pose in N, ``T_N_M(t_k) · P_Q^M(t_k)``,
+the camera's measurement composed with the carrier's own estimate at the
+frame's stamp ``t_k`` (not the fused pose: the UAV's own estimate is no part
+of it). The UAV's flight estimator fuses it as a delayed measurement
+(:mod:`marsupial.world.estimation.external`), which pulls O onto N: ``C``
+then tends to the identity and the UAV's velocity estimate, the one its
+autopilot flies on, is the velocity in N, the frame of the carrier's
+velocity that the relative hold feeds forward. Frames: N is the carrier's
+navigation frame; O the UAV's, equal to N at the start of a run and after
+a deploy hand-over (``reset_estimate``), anchored to N while fixes arrive.
+
 Frames and units: 4×4 homogeneous transforms ``T_A_B`` (B in A), metres,
 radians, seconds (simulated).
 """
@@ -33,7 +46,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from marsupial.geometry import rot_z, rotation_matrix, transform
-from marsupial.world.onboard import StateEstimate
+from marsupial.world.onboard import StateEstimate, VisionFix, vision_fix_topic
 
 from .selection import yaw_of_rotation
 
@@ -208,11 +221,12 @@ class RelativePose:
 
     Runs on the carrier's computer: the carrier's own estimate, the UAV's as
     the team link delivers it, the frames of the carrier's
-    :class:`~.observer.EyeInHandObserver`.
+    :class:`~.observer.EyeInHandObserver`; sends each accepted frame to the
+    UAV as a vision fix (the module docstring).
 
     Args:
         carrier: the carrier's onboard interface (``estimate()``, ``arm_mount()``).
-        link: the team link as the carrier reads it (``latest(uav)``).
+        link: the team link as the carrier uses it (``latest(uav)``, ``send``).
         uav: the UAV's name.
         observer: the carrier's eye-in-hand observer; ``None``: the estimates alone, no frame fused.
         gain, gate: of the :class:`RelativePoseFilter`.
@@ -234,6 +248,11 @@ class RelativePose:
         T_N_base = self.carrier_history.at(t)
         return None if T_N_base is None else T_N_base @ self.T_base_M
 
+    def send_fix(self, T_N_Q: np.ndarray, stamp: float) -> None:
+        """Send the UAV its pose in N measured at ``stamp`` (s) over the team link (once per frame)."""
+        fix = VisionFix(stamp, tuple(float(v) for v in T_N_Q[:3, 3]), yaw_of_rotation(T_N_Q[:3, :3]), f"{self.carrier.name}/eye_in_hand")
+        self.link.send(vision_fix_topic(self.uav), fix)
+
     def update(self, now: float) -> RelativeState:
         """Read the estimates, fuse a new frame in which the bundle was measured, and propagate to ``now``."""
         self.carrier_history.add(self.carrier.estimate())
@@ -248,6 +267,7 @@ class RelativePose:
                 observation.pose.T_M_Q, T_N_M, T_O_Q, observation.stamp
             ):
                 self.seen_at = observation.stamp
+                self.send_fix(T_N_M @ observation.pose.T_M_Q, observation.stamp)
         T_N_M, T_O_Q = self.T_N_M(now), self.uav_history.at(now)
         if T_N_M is None or T_O_Q is None:
             return RelativeState(now, seen_at=self.seen_at)
