@@ -1,33 +1,41 @@
 """The landing experiments of Palafox et al. (2019), side by side with the paper: Table 2, Figs. 6–11 and 13.
 
-    python benchmarks/landing.py [--quick] [--workers 2] [--runs DIR]
+    python benchmarks/landing.py [--quick] [--sweep] [--workers 2] [--runs DIR]
                                  [--out benchmarks/out/landing.json] [--report docs/results/landing.md]
 
 Everything runs through the campaign runner (``trees/campaign.py``), every
 run keeps its MCAP log, and every figure is computed from those logs
-(``trees/replay.py``):
+(``trees/replay.py``). Every controller sees only what the UAV senses (the
+sensing boundary): bottom-camera frames (pixel noise, exposure, ≈0.1 s
+latency, drops), the sonar, the IMU and the UAV's onboard estimate, which
+drifts; the platform's size is a static prior. Sensing is at its default
+(``world.sensing.noise_scale`` 1) unless a row says otherwise.
 
 1. §4.2.1 — ``landing_linear`` and ``landing_circular``, 5 runs each
-   (seeds 0–4) with the reactive controller, the paper's predictive one
-   (``velocity_feedforward=false``) and ours (predictive with the velocity
-   feed-forward, the default). Per run: mean absolute x / y error from
+   (seeds 0–4) with the reactive controller, the paper's predictive one as
+   printed (``velocity_feedforward=false``), ours (predictive with the
+   velocity feed-forward, the default) and ours at ``noise_scale`` 0
+   (perfect sensors, for reference). Per run: mean absolute x / y error from
    take-off to touchdown (the paper's Fig. 10 statistic), landing error.
-2. §4.2.3 — ``landing_lifelong``, 50 consecutive cycles at
-   (v, ω) = (0.5, 0.05) and (0.7, 0.07): landings, re-localisations and their
-   reasons, MAE and max error per axis (Table 2), total test time.
+2. §4.2.3, Table 2 — ``landing_lifelong``, 50 consecutive cycles at
+   (v, ω) = (0.5, 0.05) and (0.7, 0.07), each with the paper's controller,
+   ours and ours at ``noise_scale`` 0: landings, re-localisations and their
+   reasons, MAE and max error per axis, total test time.
 3. Robustness (not in the paper) — the nominal life-long run with 3 m/s
    gusts and 10 % frame drops of the bottom camera.
-   Once more (one run each) with 0.1 s of video latency on the bottom
-   camera: the simulated camera has none, and latency is what the paper's
-   0.1 s prediction makes up for.
-4. Speed — Algorithm 1 ms/frame at 320×240 on rendered frames (one thread),
+4. With ``--sweep``: ours on the nominal life-long run (10 cycles) against
+   ``noise_scale`` ∈ {0, 0.5, 1, 2, 4}.
+5. Speed — Algorithm 1 ms/frame at 320×240 on rendered frames (one thread),
    and the real-time factor of the nominal 50-cycle run (it runs alone).
 
-Errors are the platform centre relative to the UAV in the UAV's heading
-frame (ground truth, logged at 10 Hz while flying). ``--quick``: 1 run per
-§4.2.1 variant and 5 cycles per life-long run. Writes the JSON, the report
-(Markdown with the tables and the plots, PNGs under ``docs/results/img/``)
-and prints the tables. The targets are checked and listed in the report.
+Errors are scored on simulator truth by the run's referee
+(``world/scoring.py``: ``tracking_error_x`` / ``_y``, the platform centre
+relative to the UAV in its true heading frame, 10 Hz while flying) and, for
+the landing error, from the logged true poses at each touchdown. ``--quick``:
+1 run per §4.2.1 variant and 5 cycles per life-long run (and per sweep
+point). Writes the JSON, the report (Markdown with the tables and the plots,
+PNGs under ``docs/results/img/``) and prints the tables. The targets are
+checked and listed in the report.
 """
 
 from __future__ import annotations
@@ -48,6 +56,7 @@ from typing import Any
 import cv2
 import numpy as np
 
+from marsupial.geometry import heading_rotation, yaw_of
 from marsupial.skills.landing.detection import DetectionParams, detect_platform, tilt_of
 from marsupial.trees.campaign import run_campaign
 from marsupial.trees.replay import RunLog, read_log
@@ -59,18 +68,31 @@ ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_OUT = ROOT / "benchmarks" / "out" / "landing.json"
 DEFAULT_REPORT = ROOT / "docs" / "results" / "landing.md"
 GUSTS = "{wind: {gust: 3.0}, frame_drops: {camera: uav/bottom_camera, probability: 0.1}}"
-VIDEO_LATENCY = "{video_latency: {camera: uav/bottom_camera, seconds: 0.1}}"  # relayed video, e.g. over Wi-Fi
+OURS = "predictive + feed-forward"
+PAPER = "predictive (paper)"
+PERFECT = {"world.sensing.noise_scale": "0"}  # perfect sensors: for reference, never a result
 VARIANTS = {  # §4.2.1 controllers: label -> --set overrides
     "reactive": {"mode": "reactive"},
-    "predictive (paper)": {"mode": "predictive", "velocity_feedforward": "false"},
-    "predictive + feed-forward": {"mode": "predictive", "velocity_feedforward": "true"},
+    PAPER: {"mode": "predictive", "velocity_feedforward": "false"},
+    OURS: {"mode": "predictive", "velocity_feedforward": "true"},
+    f"{OURS}, noise_scale 0": {"mode": "predictive", "velocity_feedforward": "true", **PERFECT},
 }
-LIFELONG = {  # life-long runs: label -> --set overrides
-    "0.5 m/s, 0.05 rad/s": {"v": "0.5", "omega": "0.05"},
-    "0.7 m/s, 0.07 rad/s": {"v": "0.7", "omega": "0.07"},
-    "0.5 m/s, 0.05 rad/s, 3 m/s gusts, 10 % frame drops": {"v": "0.5", "omega": "0.05", "world.disturbances": GUSTS},
+NOMINAL_SPEED = {"v": "0.5", "omega": "0.05"}
+DEMANDING_SPEED = {"v": "0.7", "omega": "0.07"}
+NOMINAL = f"0.5 m/s, 0.05 rad/s, {OURS}"
+DEMANDING = f"0.7 m/s, 0.07 rad/s, {OURS}"
+GUSTY = f"0.5 m/s, 0.05 rad/s, {OURS}, 3 m/s gusts, 10 % frame drops"
+LIFELONG = {  # life-long runs: label -> --set overrides (Table 2: paper's controller, ours, ours at noise_scale 0)
+    "0.5 m/s, 0.05 rad/s, predictive (paper)": {**NOMINAL_SPEED, "velocity_feedforward": "false"},
+    NOMINAL: NOMINAL_SPEED,
+    f"{NOMINAL}, noise_scale 0": {**NOMINAL_SPEED, **PERFECT},
+    "0.7 m/s, 0.07 rad/s, predictive (paper)": {**DEMANDING_SPEED, "velocity_feedforward": "false"},
+    DEMANDING: DEMANDING_SPEED,
+    f"{DEMANDING}, noise_scale 0": {**DEMANDING_SPEED, **PERFECT},
+    GUSTY: {**NOMINAL_SPEED, "world.disturbances": GUSTS},
 }
-NOMINAL = next(iter(LIFELONG))
+SWEEP_NOISE_SCALES = (0.0, 0.5, 1.0, 2.0, 4.0)
+SWEEP_CYCLES = 10
 # the paper's figures (§4.2.2 text and Fig. 10 for §4.2.1; Table 2 for §4.2.3)
 PAPER_421 = {
     ("linear", "reactive"): "x ≈ 0.10, y ≈ 0",
@@ -79,7 +101,7 @@ PAPER_421 = {
     ("circular", "predictive (paper)"): "x ≈ 0, y ≈ 0.03",
 }
 PAPER_TABLE2 = {
-    NOMINAL: {"time": "1072.41 s", "landed": "50/50 (100 %)", "reloc": "0", "max": "0.734 / 0.653 m",
+    "0.5 m/s, 0.05 rad/s": {"time": "1072.41 s", "landed": "50/50 (100 %)", "reloc": "0", "max": "0.734 / 0.653 m",
               "mae": "0.127 / 0.103 m (text: 0.245 m for y)"},
     "0.7 m/s, 0.07 rad/s": {"time": "1249.09 s", "landed": "34/50 (68 %)", "reloc": "16", "max": "1.526 / 1.441 m",
                             "mae": "0.245 / 0.232 m"},
@@ -164,15 +186,32 @@ def run_stats(path: str | Path) -> RunStats:
             stats.landings += 1
             stats.clean_cycles += cycle_clean
     names = {m["name"] for m in log.metrics}
-    if "landing_error_x" in names:
-        _, lx = log.metric("landing_error_x", robot="uav")
-        _, ly = log.metric("landing_error_y", robot="uav")
-        stats.landing_errors = np.c_[lx, ly]
+    stats.landing_errors = landing_errors(log, [e["t"] for e in log.events if e["kind"] == "state_change"
+                                                and e.get("robot") == "uav" and e.get("state") == "landed"])
     if "battery_soc" in names:
         stats.battery_end = float(log.metric("battery_soc", robot="uav")[1][-1])
     if "ground_landing" in names:
         stats.ground_landings = len(log.metric("ground_landing", robot="uav")[0])
     return stats
+
+
+def landing_errors(log: RunLog, times: list[float]) -> np.ndarray:
+    """True platform centre minus UAV (m, the UAV's true heading frame) at each of ``times``: ``(N, 2)``.
+
+    Scoring, from the logged true poses (``/truth/<robot>/pose``; the
+    platform's centre is above the UGV's base), at the pose sample nearest
+    each time (the poses are logged at 5 Hz; the UAV is at rest on the
+    platform when it is declared landed).
+    """
+    if not times:
+        return np.zeros((0, 2))
+    t, uav, q = log.poses("uav", orientation=True)
+    _, ugv = log.poses("ugv")
+    rows = []
+    for when in times:
+        i = int(np.argmin(np.abs(t - when)))
+        rows.append(heading_rotation(yaw_of(q[i])) @ (ugv[i, :2] - uav[i, :2]))
+    return np.array(rows)
 
 
 def campaign_logs(out: Path) -> list[dict[str, Any]]:
@@ -206,7 +245,7 @@ def section_421(runs: Path, trials: int, workers: int, extra: dict[str, str] | N
 
 
 def lifelong(runs: Path, cycles: int, workers: int) -> dict[str, Any]:
-    """§4.2.3 and the gusty variant: one campaign trial each; the nominal one last and alone (its speed counts)."""
+    """§4.2.3 (Table 2 rows) and the gusty variant: one campaign trial each; ours nominal last and alone (its speed counts)."""
     def one(label: str) -> dict[str, Any]:
         out = runs / f"lifelong_{list(LIFELONG).index(label)}"
         cpu_before = _children_cpu_s()
@@ -227,6 +266,21 @@ def lifelong(runs: Path, cycles: int, workers: int) -> dict[str, Any]:
         results = dict(zip(others, pool.map(one, others)))
     results[NOMINAL] = one(NOMINAL)
     return {label: results[label] for label in LIFELONG}
+
+
+def noise_sweep(runs: Path, cycles: int, workers: int) -> dict[str, Any]:
+    """Ours on the nominal life-long run against ``world.sensing.noise_scale`` (:data:`SWEEP_NOISE_SCALES`)."""
+    def one(scale: float) -> dict[str, Any]:
+        out = runs / f"sweep_{scale:g}"
+        overrides = {**NOMINAL_SPEED, "cycles": str(cycles), "world.sensing.noise_scale": f"{scale:g}"}
+        run_campaign("landing_lifelong", 1, out, overrides=overrides, workers=1, keep_logs="all")
+        (record,) = campaign_logs(out)
+        stats = run_stats(record["log"]).summary()
+        stats.update(cycles=cycles, noise_scale=scale)
+        return stats
+
+    with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
+        return {f"{scale:g}": stats for scale, stats in zip(SWEEP_NOISE_SCALES, pool.map(one, SWEEP_NOISE_SCALES))}
 
 
 def _children_cpu_s() -> float:
@@ -287,7 +341,7 @@ def plots(results: dict[str, Any], img: Path) -> dict[str, str]:
     for track, figs in (("linear", "6-7"), ("circular", "8-9")):
         fig_traj, axes_traj = plt.subplots(1, 2, figsize=(11, 4.2))
         fig_err, axes_err = plt.subplots(2, 2, figsize=(11, 5.5), sharex=True)
-        for col, label in enumerate(("reactive", "predictive + feed-forward")):
+        for col, label in enumerate(("reactive", OURS)):
             log = first_log(track, label)
             _, uav = log.poses("uav")
             _, ugv = log.poses("ugv")
@@ -321,7 +375,7 @@ def plots(results: dict[str, Any], img: Path) -> dict[str, str]:
 
     fig, axes = plt.subplots(1, 2, figsize=(12, 5.5))
     fig_z, axes_z = plt.subplots(2, 1, figsize=(11, 5), sharex=True)
-    for col, label in enumerate(list(LIFELONG)[:2]):
+    for col, label in enumerate((NOMINAL, DEMANDING)):
         log = read_log(results["lifelong"][label]["log"])
         t_uav, uav = log.poses("uav")
         _, ugv = log.poses("ugv")
@@ -347,13 +401,13 @@ def _m(value: float) -> str:
 def verdicts(results: dict[str, Any], cycles: int) -> dict[str, tuple[bool, str]]:
     """Each target: met?, and what was measured."""
     life = results["lifelong"]
-    nominal, demanding, gusts = (life[label] for label in LIFELONG)
+    nominal, demanding, gusts = life[NOMINAL], life[DEMANDING], life[GUSTY]
     r421 = results["421"]
-    ours = [r421[f"{track}/predictive + feed-forward"] for track in ("linear", "circular")]
+    ours = [r421[f"{track}/{OURS}"] for track in ("linear", "circular")]
     def error(track: str, label: str) -> float:  # mean error of a row: the per-axis MAEs summed
         return r421[f"{track}/{label}"]["mae_x_m"] + r421[f"{track}/{label}"]["mae_y_m"]
 
-    better = all(error(track, "predictive + feed-forward") < error(track, "reactive") for track in ("linear", "circular"))
+    better = all(error(track, OURS) < error(track, "reactive") for track in ("linear", "circular"))
     worst_421 = max(max(r["mae_x_m"], r["mae_y_m"]) for r in ours)
     failures_ok = demanding["ground_landings"] == 0 and demanding["landings"] == cycles
     need = math.ceil(0.96 * cycles)
@@ -398,7 +452,11 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path, cycles: 
         f"Generated by `python benchmarks/landing.py{' --quick' if results['quick'] else ''}` "
         f"on {results['date']} ({results['machine']['cpus']} CPUs, Python {results['machine']['python']}). "
         "Every figure below is computed from the runs' MCAP logs; errors are the platform centre relative to the "
-        "UAV in its heading frame (ground truth, 10 Hz, from take-off to touchdown).",
+        "UAV in its heading frame, scored on ground truth by the run's referee (10 Hz, from take-off to touchdown). "
+        "The controllers see only what the UAV senses: the bottom camera (pixel noise, exposure, ≈0.1 s latency, "
+        "drops), the sonar, the IMU and the UAV's own drifting estimate; the platform's size is a static prior. "
+        "Sensing is at its default (`world.sensing.noise_scale` 1) except in the rows marked *noise_scale 0* "
+        "(perfect sensors, a reference only).",
         "",
         "## Targets",
         "",
@@ -411,12 +469,12 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path, cycles: 
         "",
         f"## Life-long operation, {cycles} consecutive cycles (§4.2.3, Table 2)",
         "",
-        "Predictive controller with the velocity feed-forward; take-off, land signal 10 s after the take-off, "
-        "landing, 1 s rest; the UAV starts landed on the platform. *Landed* counts the cycles whose landing "
-        "needed no re-localisation, as the paper counts them (its 16 re-localisations left 34 landings); "
-        "every cycle of ours ends landed on the platform.",
+        "The paper's predictive controller as printed (*predictive (paper)*: no feed-forward, 0.1 s path time) and "
+        "ours (*predictive + feed-forward*); take-off, land signal 10 s after the take-off, landing, 1 s rest; the "
+        "UAV starts landed on the platform. *Landed* counts the cycles whose landing needed no re-localisation, as "
+        "the paper counts them (its 16 re-localisations left 34 landings).",
         "",
-        "| | " + " | ".join(f"paper, {label}" for label in PAPER_TABLE2) + " | " + " | ".join(f"ours, {label}" for label in LIFELONG) + " |",
+        "| | " + " | ".join(f"paper, {label}" for label in PAPER_TABLE2) + " | " + " | ".join(f"sim, {label}" for label in LIFELONG) + " |",
         "|---|" + "---|" * (len(PAPER_TABLE2) + len(LIFELONG)),
     ]
     rows = [
@@ -470,21 +528,23 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path, cycles: 
             f"{row['landed']}/{len(row['runs'])} | {_m(row['landing_error_x_m'])} / {_m(row['landing_error_y_m'])} | "
             f"{row['relocalizations']} |"
         )
-    lines += [
-        "",
-        "The same with 0.1 s of video latency on the bottom camera (one run each; the simulated camera has none "
-        "by default). Without latency the reactive controller acts on the platform's present position and the "
-        "paper's 0.1 s prediction only puts the UAV 0.05 m ahead of it on the linear track; with latency the "
-        "reactive controller trails by v·latency (0.05 m), which the prediction makes up for on the linear track. "
-        "On the circle the paper's predictive controller stays behind the reactive one in x either way: without "
-        "a feed-forward both trail by about v·ω/K_i, and its filter (Q = R = 2, fused at 10 Hz) adds its own lag.",
-        "",
-        "| track | controller | ours MAE x (m) | ours MAE y (m) | landed | re-localisations |",
-        "|---|---|---|---|---|---|",
-    ]
-    for row in results["421_latency"].values():
-        lines.append(f"| {row['track']} | {row['controller']} | {_m(row['mae_x_m'])} | {_m(row['mae_y_m'])} | "
-                     f"{row['landed']}/{len(row['runs'])} | {row['relocalizations']} |")
+    if results.get("sweep"):
+        lines += [
+            "",
+            f"### Sensitivity to the sensing noise: ours, nominal life-long run, {results['sweep_cycles']} cycles per point",
+            "",
+            "`world.sensing.noise_scale` multiplies every noise, bias, drift, latency and drop figure of the sensors "
+            "and estimators (1: the documented defaults).",
+            "",
+            "| noise_scale | landed without re-localisation | re-localisations | ground landings | MAE x / y (m) | max x / y (m) | landing error max (m) |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for scale, r in results["sweep"].items():
+            lines.append(
+                f"| {scale} | {r['cycles_landed_without_relocalization']}/{r['cycles']} | {r['relocalizations']} | "
+                f"{r['ground_landings']} | {_m(r['mae_x_m'])} / {_m(r['mae_y_m'])} | {_m(r['max_x_m'])} / {_m(r['max_y_m'])} | "
+                f"{_m(r['landing_error_max_m'])} |"
+            )
     lines += [
         "",
         f"![error boxplots]({rel['error_boxplots']})",
@@ -527,8 +587,15 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path, cycles: 
         "trackbar values (K_p 0.45, K_i 0.1 at 4 m), which their node never used as a schedule.",
         "- Beyond the paper, on by default in the predictive skills: the velocity feed-forward (the filter's platform "
         "velocity added to the PI output, path time 0), conditional integration of the PI within 0.1 m, and, on a "
-        "take-off from a moving platform, a filter started from the ride's velocity. `velocity_feedforward: false` "
-        "gives the paper's predictive controller (the *predictive (paper)* rows).",
+        "take-off from a moving platform, a filter started from the UAV's own estimated velocity (onboard data). "
+        "`velocity_feedforward: false` gives the paper's predictive controller (the *predictive (paper)* rows), "
+        "whose filter starts empty.",
+        "- Departures from the paper in what the controllers see: the paper's Gazebo node projected detections with "
+        "the simulator's pose of the drone; here every frame is posed with the UAV's onboard estimate at the frame's "
+        "stamp (the video arrives ≈0.1 s late) composed with the camera's URDF mount, and the Kalman filter runs in "
+        "the estimate's navigation frame (its drift cancels between platform and UAV positions). Frames are used up "
+        "to 25° of tilt (the authors' node: 10°). The touchdown test (§3.3.1, thresholds ours: sonar < 0.3 m for "
+        "0.3 s, horizontal specific force RMS ≥ 0.2 m/s²) reads every 200 Hz IMU sample of its window.",
         "- The predictive controller reads a camera frame per 0.1 s filter step (the frames it fuses); the reactive "
         "one and the search of a re-localisation read every 30 Hz frame.",
     ]
@@ -541,6 +608,7 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path, cycles: 
 # ------------------------------------------------------------------ main
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser = campaign_arguments(__doc__.split("\n\n")[0], "1 run per §4.2.1 variant, 5 life-long cycles", DEFAULT_OUT, DEFAULT_REPORT)
+    parser.add_argument("--sweep", action="store_true", help="also sweep world.sensing.noise_scale for ours (life-long runs)")
     args = parser.parse_args(argv)
     trials, cycles = (1, 5) if args.quick else (5, 50)
     with tempfile.TemporaryDirectory(prefix="landing_runs_") as scratch:
@@ -556,8 +624,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             "detection": detection_speed(repeats=50 if args.quick else 200),
         }
         results["421"] = section_421(runs, trials, args.workers)
-        results["421_latency"] = section_421(runs, 1, args.workers, {"world.disturbances": VIDEO_LATENCY}, "_latency")
         results["lifelong"] = lifelong(runs, cycles, args.workers)
+        if args.sweep:
+            results["sweep_cycles"] = cycles if args.quick else SWEEP_CYCLES
+            results["sweep"] = noise_sweep(runs, results["sweep_cycles"], args.workers)
         images = plots(results, args.report.parent / "img")
         results["benchmark_wall_time_s"] = time.perf_counter() - started
         report(results, images, args.report, cycles)

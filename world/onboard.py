@@ -24,6 +24,7 @@ mission with truth calls from skill code trapped
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from types import CodeType
@@ -119,7 +120,10 @@ class SensorPort:
     the sensor's own data type.
     """
 
-    __slots__ = ("name", "__sensor", "__image", "__scan", "__depth")
+    __slots__ = ("name", "__sensor", "__image", "__scan", "__depth", "__queue")
+
+    #: how long (s) :meth:`read_since` keeps the samples of its queue
+    QUEUE_S: ClassVar[float] = 2.0
 
     def __init__(self, name: str, sensor: Sensor[Any], depth: bool = True):
         self.name = name
@@ -127,6 +131,7 @@ class SensorPort:
         self.__image = hasattr(sensor, "intrinsics")
         self.__scan = isinstance(sensor, Lidar)
         self.__depth = depth
+        self.__queue: deque[Reading[Any]] | None = None
 
     def read(self) -> Reading[Any] | None:
         """The newest readable sample (``None`` before the first); its ``stamp`` is the sample's sim time (s)."""
@@ -140,6 +145,32 @@ class SensorPort:
             scan = reading.data
             return Reading(reading.stamp, RangeScan(scan.ranges, scan.angles, scan.max_range))
         return reading
+
+    def read_since(self, stamp: float) -> list[Reading[Any]]:
+        """Every sample stamped after ``stamp`` (s), oldest first, as the driver's queue delivers them.
+
+        A robot's computer receives a sensor's samples as a stream at the
+        sensor's rate (e.g. the 200 Hz IMU), not only the newest at the
+        moment it looks; this is that queue, for the sensors other than
+        cameras and LiDARs (their readings are wrapped by :meth:`read`). The
+        first call starts it (nothing older is returned); it keeps the last
+        :attr:`QUEUE_S` seconds. Latency and dropouts apply as for :meth:`read`.
+        """
+        if self.__image or self.__scan:
+            raise TypeError(f"sensor '{self.name}' is a camera or a LiDAR: read() its newest frame or scan")
+        if self.__queue is None:
+            sensor = self.__sensor
+            self.__queue = deque(maxlen=max(1, int(sensor.config.rate_hz * self.QUEUE_S)))
+            sensor.world.add_step_hook(self.__enqueue)
+            self.__enqueue(0.0)
+        return [reading for reading in self.__queue if reading.stamp > stamp]
+
+    def __enqueue(self, dt: float) -> None:
+        """Step hook: append the sensor's newest sample when it is new (the sensor samples at its rate)."""
+        reading = self.__sensor.read()
+        queue = self.__queue
+        if reading is not None and queue is not None and (not queue or reading.stamp > queue[-1].stamp):
+            queue.append(reading)
 
     def __getattr__(self, name: str) -> Any:
         if name in SENSOR_FACTS:

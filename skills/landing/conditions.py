@@ -1,6 +1,6 @@
 """Conditions of the landing state machine of Palafox et al. (2019, §3.1): lost platform, landed, flight time.
 
-They read the UAV's :class:`~.tracking.TrackingModule` (blackboard key
+They read only the onboard state of the UAV's :class:`~.tracking.TrackingModule` (blackboard key
 ``<uav>/tracking``, written by the landing skills); before the first
 take-off there is none and none of them holds.
 
@@ -95,4 +95,4 @@ class FlightTime(_TrackingCondition):
         if module is None or module.state == "landed":
             return False
         start = module.flight_start if self.params.since == "takeoff" else module.tracking_start
-        return start is not None and self.world.now + 1e-9 >= start + self.params.seconds
+        return start is not None and self.now + 1e-9 >= start + self.params.seconds

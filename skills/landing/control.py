@@ -48,11 +48,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from marsupial.world.errors import UnknownNameError
-from marsupial.world.robots.quadrotor import ARDRONE2
 
 from .prediction import KalmanParams, PlatformPredictor
 
 MODES = ("reactive", "predictive")
+#: default horizontal speed limit (m/s): the AR.Drone 2 model's; the skills pass their UAV's ``limits.max_speed_xy``
+MAX_SPEED_XY = 3.0
 
 
 @dataclass(frozen=True)
@@ -99,7 +100,7 @@ class HeightAdaptivePI:
     def __init__(
         self,
         gains: PIGains = PIGains(),
-        max_speed: float = ARDRONE2.limits.max_speed_xy,
+        max_speed: float = MAX_SPEED_XY,
         integral_band: float | None = None,
     ):
         if max_speed <= 0.0:
@@ -145,8 +146,9 @@ class HeightAdaptivePI:
 class PlatformTracker:
     """Height-adaptive PI on the measured (``"reactive"``) or predicted (``"predictive"``) platform position.
 
-    Call :meth:`observe` with every platform measurement (world frame, e.g.
-    ``Detection.position_in(frame.rotation, frame.position)``) and
+    Call :meth:`observe` with every platform measurement (in the UAV's
+    navigation frame, e.g. ``Detection.position_in(R_nav_camera, p_nav_camera)``
+    with the camera pose from the UAV's estimate at the frame's stamp) and
     :meth:`command` at the control rate. The reactive target is the last
     measurement; the predictive one the Kalman prediction one path time
     ahead (§3.3.2). The error is the target minus the UAV position, turned
@@ -169,7 +171,7 @@ class PlatformTracker:
         mode: str = "reactive",
         gains: PIGains = PIGains(),
         kalman: KalmanParams = KalmanParams(),
-        max_speed: float = ARDRONE2.limits.max_speed_xy,
+        max_speed: float = MAX_SPEED_XY,
         velocity_feedforward: bool = False,
         integral_band: float | None = None,
     ):

@@ -1,8 +1,9 @@
 """Prediction of the platform's position with a Kalman filter (Palafox et al. 2019, §3.3.2).
 
 The platform's centroid, measured in the world frame (``P_world =
-T_world_cam P_cam``), feeds a constant-velocity Kalman filter with state
-``[x, y, v_x, v_y]`` (m, m/s, world frame). The paper's configuration: a
+T_world_cam P_cam``; on the UAV, the navigation frame of its onboard
+estimate), feeds a constant-velocity Kalman filter with state
+``[x, y, v_x, v_y]`` (m, m/s, same frame). The paper's configuration: a
 time step of 0.1 s, a path time of 0.1 s (so the path of predictions holds
 the current position and the one 0.1 s ahead, and the controller takes the
 latter), and diagonal covariances ``Q = 2·I₄`` and ``R = 2·I₂`` obtained
@@ -120,6 +121,16 @@ class PlatformPredictor:
         """
         self.filter.reset(position_world, velocity_world)
         self.stamp = t
+
+    def shift_velocity(self, delta_world: np.ndarray) -> None:
+        """Add ``delta_world`` (m/s, world frame) to the estimated velocity: the frame's own velocity changed.
+
+        E.g. the UAV's navigation frame starts moving with the platform once
+        its optical flow sees the platform (:mod:`.flowframe`); positions are
+        kept. No effect before the first measurement.
+        """
+        if self.stamp is not None:
+            self.filter.x[2:] += np.asarray(delta_world, dtype=float)[:2]
 
     def observe(self, t: float, position_world: np.ndarray) -> bool:
         """Offer the platform position measured at ``t`` (world frame, m); True if it was fused.

@@ -13,8 +13,8 @@ the state machine's clocks carry over from one skill to the next.
   mission can also swap them by name (or pin one in place of ``follow``).
 - ``land`` — landing: descend at 0.3 m/s while the sonar reads more than
   0.7 m, then at 2.0 m/s (§3.3.1), tracking all the way; landed when the
-  sonar stays below a threshold and the IMU feels the moving platform, then
-  motors off: the UAV rides the platform.
+  sonar stays below a threshold and the IMU feels the moving platform
+  (:mod:`.touchdown`), then motors off: the UAV rides the platform.
 - ``relocalize`` — re-localizing: climb at 1 m/s with the x-y control off
   until the platform is seen again, then track while climbing back to the
   nominal height, after which a land command is processed again (§3.1).
@@ -41,6 +41,7 @@ from pydantic import Field, model_validator
 
 from marsupial.trees.skill import NodeParams, Skill
 
+from .touchdown import TouchdownParams, TouchdownTest
 from .tracking import GAIN_SCHEDULES, TrackerConfig, TrackingModule, tracking_module
 
 GainSchedule = Literal[tuple(GAIN_SCHEDULES)]  # type: ignore[valid-type]
@@ -91,7 +92,9 @@ class FlightSkill(Skill):
         """Whether the motors have stopped under the skill (an empty battery stops them); says so in the feedback."""
         if self.robot.motors_on:
             return False
-        self.feedback_message = f"motors stopped, battery at {self.robot.battery.soc:.0%}"
+        battery = self.robot.battery()  # the battery monitor
+        level = "unknown" if battery is None else f"{battery.soc_percent:.0f}%"
+        self.feedback_message = f"motors stopped, battery at {level}"
         return True
 
     def fly(self, vz: float, track: bool = True) -> None:
@@ -145,7 +148,7 @@ class Takeoff(FlightSkill):
         if not self.climb_tracking(self.params):
             return Status.RUNNING
         if module.tracking_start is None:
-            module.tracking_start = self.world.now
+            module.tracking_start = self.now
         module.set_state("tracking", self, "nominal height reached")
         return Status.SUCCESS
 
@@ -163,7 +166,7 @@ class Follow(FlightSkill):
 
     def start(self) -> None:
         super().start()
-        self._until = None if self.params.seconds is None else self.world.now + self.params.seconds
+        self._until = None if self.params.seconds is None else self.now + self.params.seconds
         self.module.set_state("tracking", self)
 
     def step(self) -> Status:
@@ -173,7 +176,7 @@ class Follow(FlightSkill):
             return Status.FAILURE
         seen = "not located yet" if module.offset is None else f"{np.hypot(*module.offset):.2f} m away"
         self.feedback_message = f"platform {seen}, {module.height:.2f} m above it"
-        if self._until is not None and self.world.now + 1e-9 >= self._until:
+        if self._until is not None and self.now + 1e-9 >= self._until:
             return Status.SUCCESS
         self.fly(self.hold_height(p.nominal_height, p.height_gain, p.max_climb_speed))
         return Status.RUNNING
@@ -198,13 +201,13 @@ class TrackPredictive(Follow):
 class Land(FlightSkill):
     """Descend onto the moving platform while tracking it; motors off once landed on it (§3.1, §3.3.1).
 
-    Landed (§3.3.1): the sonar reads less than ``landed_range`` for
-    ``landed_hold_s`` in a row AND the IMU's horizontal specific force over
-    that time is that of a vehicle riding a moving platform (RMS at least
-    ``ride_accel``; at rest on the ground it is only the sensor noise,
-    ≈0.07 m/s² for the AR.Drone 2 model, while the moving Summit XL shakes
-    its rider with ≈0.4 m/s²). Sonar low but IMU still: the UAV came down on
-    the ground, the skill fails.
+    Landed (§3.3.1, :mod:`.touchdown`): the sonar reads less than
+    ``landed_range`` for ``landed_hold_s`` in a row AND the IMU's horizontal
+    specific force over that time, every sample at the IMU's rate, is that of
+    a vehicle riding a moving platform (RMS at least ``ride_accel``; at rest
+    on the ground it is only the sensor noise, ≈0.07 m/s² for the AR.Drone 2
+    model, while the moving Summit XL shakes its rider with ≈0.3–0.45 m/s²).
+    Sonar low but IMU still: the UAV came down on the ground, the skill fails.
 
     The tracker carries over from the tracking state: the PI integral is
     not reset at the land command (the authors' node resets it, and a PI
@@ -220,18 +223,17 @@ class Land(FlightSkill):
         """Sonar height (m) below which the final descent starts, §3.3.1."""
         final_speed: float = Field(2.0, gt=0.0)  # 2.0 m/s below 0.7 m, §3.3.1
         """Descent speed (m/s) of the final stage (the vehicle's vertical limit may cap it), §3.3.1."""
-        landed_range: float = Field(0.3, gt=0.0)
+        landed_range: float = Field(TouchdownParams.landed_range, gt=0.0)
         """Sonar reading (m) below which the UAV may be down (the paper gives no value; the AR.Drone 2 sonar reads ≥ 0.2 m)."""
-        landed_hold_s: float = Field(0.3, gt=0.0)
+        landed_hold_s: float = Field(TouchdownParams.hold_s, gt=0.0)
         """How long (s) the sonar must stay below ``landed_range`` ("for a certain period of time", §3.3.1)."""
-        ride_accel: float = Field(0.2, gt=0.0)
-        """RMS horizontal specific force (m/s²) from which the IMU shows a moving platform, §3.3.1."""
+        ride_accel: float = Field(TouchdownParams.ride_accel, gt=0.0)
+        """RMS horizontal specific force (m/s²) over that time from which the IMU shows a moving platform, §3.3.1."""
 
     def start(self) -> None:
         super().start()
-        self._touch: float | None = None
-        self._accel: list[float] = []
-        self._touch_offset = np.zeros(2)
+        p = self.params
+        self._touchdown = TouchdownTest(TouchdownParams(p.landed_range, p.landed_hold_s, p.ride_accel))
         self.module.set_state("landing", self)
 
     def step(self) -> Status:
@@ -239,35 +241,26 @@ class Land(FlightSkill):
         module.update()
         if self.motors_stopped():
             return Status.FAILURE
-        if module.height < p.landed_range:
-            if self._touch is None:  # first contact: where the UAV lands on the platform
-                self._touch, self._accel = self.world.now, []
-                self._touch_offset = module.true_offset()
-            self._accel.append(module.accel_xy)
-            if self.world.now - self._touch + 1e-9 >= p.landed_hold_s:
-                return self._down()
-        else:
-            self._touch = None
+        verdict = self._touchdown.update(self.now, module.height, module.imu_samples)
+        if verdict is not None:
+            return self._down(verdict == "platform")
         vz = -p.descent_speed if module.height > p.final_height else -p.final_speed
         self.feedback_message = f"{module.height:.2f} m above the platform, descending at {-vz:.1f} m/s"
         self.fly(vz)
         return Status.RUNNING
 
-    def _down(self) -> Status:
+    def _down(self, on_platform: bool) -> Status:
         """Down for ``landed_hold_s``: on the moving platform (motors off, SUCCESS) or on the ground (FAILURE)."""
-        module, name = self.module, self.robot_name
-        ride = float(np.sqrt(np.mean(np.square(self._accel))))
+        test, name = self._touchdown, self.robot_name
+        ride = f"{test.ride_rms:.2f} m/s² RMS over {test.samples} IMU samples"
         self.robot.set_motors(False)
-        if ride < self.params.ride_accel:
+        if not on_platform:
             self.context.metric("ground_landing", 1.0, robot=name)
-            self.feedback_message = f"down but the IMU feels no motion ({ride:.2f} m/s² RMS): landed on the ground"
+            self.feedback_message = f"down but the IMU feels no motion ({ride}): landed on the ground"
             return Status.FAILURE
-        error = self._touch_offset
-        self.context.metric("landing_error_x", error[0], robot=name)
-        self.context.metric("landing_error_y", error[1], robot=name)
         self.context.metric("landed", 1.0, robot=name)
-        module.set_state("landed", self, f"sonar below {self.params.landed_range} m, IMU {ride:.2f} m/s² RMS")
-        self.feedback_message = f"landed {np.hypot(*error):.3f} m from the platform centre"
+        self.module.set_state("landed", self, f"sonar below {self.params.landed_range} m, IMU {ride}")
+        self.feedback_message = f"landed on the moving platform (IMU {ride})"
         return Status.SUCCESS
 
     def finish(self, status: Status) -> None:
@@ -341,11 +334,11 @@ class DrivePattern(Skill):
     def start(self) -> None:
         p = self.params
         self._omega = 0.0 if p.pattern == "linear" else (self.CIRCLE_OMEGA if p.omega is None else p.omega)
-        self._start = self.world.now
+        self._start = self.now
 
     def step(self) -> Status:
         p = self.params
-        elapsed = self.world.now - self._start
+        elapsed = self.now - self._start
         self.feedback_message = f"{p.pattern} at {p.v} m/s, {self._omega} rad/s for {elapsed:.1f} s"
         if p.seconds is not None and elapsed + 1e-9 >= p.seconds:
             return Status.SUCCESS

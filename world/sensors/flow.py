@@ -7,7 +7,8 @@ platform it reads the velocity relative to the platform. It is modelled by
 five rays from the camera, one along the body's -z axis and four towards
 the corners of a square field of half-angle ``FLOW_HALF_ANGLE``: for each,
 the body (and link) hit and its pybullet velocity at the hit point give
-the vehicle's velocity relative to that point of the surface; the device
+the vehicle's velocity relative to that point of the surface (the field's
+half-angle is the static fact ``half_angle`` of the sensor's port); the device
 reports the per-axis median of the rays that hit (the texture that fills
 most of the view wins: a small platform far below hardly moves the flow,
 a platform filling the view carries it), in the heading frame (x forward,
@@ -88,6 +89,7 @@ class OpticalFlow(Sensor[FlowData]):
         self.min_range = min_range
         self.max_range = max_range
         self.offset = tuple(float(v) for v in offset)
+        self.half_angle = FLOW_HALF_ANGLE  # static fact (datasheet): half-angle of the square flow field, rad
         self._static: set[int] = set()  # static bodies of this world seen under the camera
         # ray ends (base frame, relative to the origin) reaching max_range vertically below the camera
         t = math.tan(FLOW_HALF_ANGLE)
