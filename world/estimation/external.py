@@ -26,12 +26,15 @@ correct the same error twice; the innovation ``e`` is applied *now*
 (PX4's output-predictor scheme). Per fix, with ``Δ`` the time since the
 previous fix (at most ``max_dt``)::
 
-    p += k_p Δ e,   v += k_v Δ e,   yaw += k_yaw Δ e_yaw
+    p += k_p Δ e,   v += k_v Δ e,   b −= k_b Δ e,   yaw += k_yaw Δ e_yaw
 
-a second-order complementary filter on position and velocity (critically
-damped at ``k_p = 2ω``, ``k_v = ω²``, ω = 2 rad/s: a time constant of
-0.5 s, slow against the 10–60 Hz fixes and their 0.1–0.2 s delay, fast
-against the flow's drift). A fix farther than ``converged`` from the
+a third-order complementary filter on position, velocity and the
+accelerometer bias ``b`` (``k_p = 4 /s``, ``k_v = 4 /s²``: critically
+damped at ω = 2 rad/s, a time constant of 0.5 s, slow against the 10–60 Hz
+fixes and their 0.1–0.2 s delay, fast against the flow's drift; ``k_b =
+2 /s³``). Without the bias term a constant accelerometer bias would leave a
+velocity error of ``k_p/k_v`` times the bias, which the autopilot would fly
+(over the carrier no floor echo and no flow corrects it). A fix farther than ``converged`` from the
 estimate (e.g. the first one after a long flight), horizontally (position
 or heading) or vertically, is an offset of the frame, not a velocity error:
 it corrects that part's position (and heading) only, the innovation clipped
@@ -106,6 +109,7 @@ class VisionFixGains:
     Attributes:
         position: ``k_p`` (1/s), position correction per second per metre of innovation.
         velocity: ``k_v`` (1/s²), velocity correction per second per metre of innovation.
+        bias: ``k_b`` (1/s³), accelerometer-bias correction per second per metre of innovation.
         yaw: ``k_yaw`` (1/s), heading correction per second per radian of innovation.
         innovation_limit: position (m) and heading (rad) innovations are clipped to this length.
         converged: a fix at most this far (m; heading: rad) from the estimate, horizontally or vertically, also
@@ -119,6 +123,7 @@ class VisionFixGains:
 
     position: float = 4.0
     velocity: float = 4.0
+    bias: float = 2.0
     yaw: float = 2.0
     innovation_limit: float = 0.15
     converged: float = 0.1
@@ -181,8 +186,9 @@ class VisionFixFusion:
         """True when a flow sample of innovation ``(ex, ey)`` (m/s) is an outlier against the vision-anchored velocity."""
         return ex * ex + ey * ey > self.gains.flow_gate**2 and self.converged and self.recent(now)
 
-    def poll(self) -> tuple[float, float, float, float, float, float, float] | None:
-        """The correction of a new fix, ``(dpx, dpy, dpz, dvx, dvy, dvz, dyaw)``, or ``None`` (no new fix, or too old).
+    def poll(self) -> tuple[float, ...] | None:
+        """The correction of a new fix, ``(dpx, dpy, dpz, dvx, dvy, dvz, dyaw, dbx, dby, dbz)`` (m, m/s, rad, m/s²;
+        ``db`` is added to the accelerometer-bias estimate), or ``None`` (no new fix, or too old).
 
         The position and heading parts are added to :attr:`shift`; the caller applies all of them.
         """
@@ -213,7 +219,9 @@ class VisionFixFusion:
         kp, kyaw = g.position * dt, g.yaw * dt
         kv = g.velocity * dt if self.converged else 0.0  # a far fix is an offset of the frame
         kvz = g.velocity * dt if vertical else 0.0
-        correction = (kp * ex, kp * ey, kp * ez, kv * ex, kv * ey, kvz * ez, kyaw * eyaw)
+        kb = -g.bias * dt if self.converged else 0.0
+        kbz = -g.bias * dt if vertical else 0.0
+        correction = (kp * ex, kp * ey, kp * ez, kv * ex, kv * ey, kvz * ez, kyaw * eyaw, kb * ex, kb * ey, kbz * ez)
         s = self.shift
         s[0] += correction[0]
         s[1] += correction[1]

@@ -145,7 +145,7 @@ class FlightEstimator(Estimator):
         self.gains = gains
         self.p = [0.0, 0.0, 0.0]
         self.v = [0.0, 0.0, 0.0]
-        self.bias = [0.0, 0.0]  # m/s², horizontal accelerometer bias estimate (navigation frame)
+        self.bias = [0.0, 0.0, 0.0]  # m/s², accelerometer bias estimate (navigation frame; z: vision fixes only)
         self.resets = 0
         self.fixes = None if vision_fixes is None else VisionFixFusion(vision_fixes, fix_gains)
         self.shift = self.fixes.shift if self.fixes is not None else [0.0, 0.0, 0.0, 0.0]
@@ -213,7 +213,7 @@ class FlightEstimator(Estimator):
         b, v, p = self.bias, self.v, self.p
         ax = r00 * fx + r01 * fy + r02 * fz - b[0]
         ay = r10 * fx + r11 * fy + r12 * fz - b[1]
-        az = r20 * fx + r21 * fy + r22 * fz - GRAVITY
+        az = r20 * fx + r21 * fy + r22 * fz - GRAVITY - b[2]
         v0x, v0y, v0z = v
         v[0] += ax * dt
         v[1] += ay * dt
@@ -313,7 +313,11 @@ class FlightEstimator(Estimator):
         fixes, p, v = self.fixes, self.p, self.v
         correction = fixes.poll()  # type: ignore[union-attr]
         if correction is not None:
-            dpx, dpy, dpz, dvx, dvy, dvz, dyaw = correction
+            dpx, dpy, dpz, dvx, dvy, dvz, dyaw, dbx, dby, dbz = correction
+            b = self.bias
+            b[0] += dbx
+            b[1] += dby
+            b[2] += dbz
             p[0] += dpx
             p[1] += dpy
             p[2] += dpz
