@@ -47,10 +47,11 @@ estimate trusts the vision-anchored state over the sensors that may be
 looking at the carrier rather than the floor (EKF2's innovation gates,
 tightened because the fixes shrink the uncertainty):
 
-- sonar echoes farther than ``sonar_gate`` (0.1 m) from the predicted
-  height are no floor echoes (the carrier's deck, 0.2–0.3 m high, is then
-  never taken for the floor), and the barometer's offset is calibrated
-  against the vision-anchored height instead of correcting it;
+- the fixes are the height reference (EKF2's ``EV_HGT``): sonar echoes no
+  longer correct the height (over the carrier an echo off its deck,
+  0.2–0.3 m high, matches a height estimate that low and would hold it
+  there against the fixes) and the barometer's offset is calibrated against
+  the vision-anchored height instead of correcting it;
 - once the last fix was horizontally converged, optical-flow samples whose
   innovation exceeds ``flow_gate`` are rejected: the flow measures the
   velocity over the surface under the camera, and over the carrier's
@@ -117,7 +118,6 @@ class VisionFixGains:
         history: how long (s) the estimate's history is kept; older fixes are ignored.
         timeout: fixes count as recent while the last one is at most this old (s).
         flow_gate: while fixes are recent, flow samples with a larger innovation (m/s) are rejected.
-        sonar_gate: while fixes are recent, the sonar's gate (m) on the predicted height.
         max_dt: longest interval (s) between two fixes that a fix's correction is scaled by.
     """
 
@@ -130,7 +130,6 @@ class VisionFixGains:
     history: float = 0.5
     timeout: float = 0.5
     flow_gate: float = 0.15
-    sonar_gate: float = 0.1
     max_dt: float = 0.2
 
 

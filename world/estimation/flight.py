@@ -28,9 +28,10 @@ complementary filter (plain ``math``; it runs at the autopilot rate,
   is compared with the estimate at its stamp (a short history) and corrects
   position, velocity and heading now; while fixes are recent, flow samples
   that disagree with the vision-anchored velocity by more than a gate (the
-  flow over a moving deck) are rejected, the sonar gate is tightened (no
-  deck echo taken for the floor) and the barometer is calibrated against
-  the anchored height. The position and heading
+  flow over a moving deck) are rejected, the sonar echoes no longer correct
+  the height (they still make it valid for the flow: an echo off the
+  carrier's deck would otherwise be taken for the floor) and the barometer
+  is calibrated against the anchored height. The position and heading
   corrections are cumulated in :attr:`FlightEstimator.shift`, which the
   autopilot follows with its references (the frame moved, not the vehicle).
 - at rest (motors off, or held by a docking device) the estimate is held:
@@ -261,8 +262,7 @@ class FlightEstimator(Estimator):
     def _correct_height(self, r22: float) -> None:
         """Sonar echoes gated on the expected floor; the barometer when no floor echo is recent."""
         g, now, p, v = self.gains, self.clock.now, self.p, self.v
-        anchored = self.fixes is not None and self.fixes.recent(now)  # vision fixes hold the height
-        gate = min(g.sonar_gate, self.fixes.gains.sonar_gate) if anchored else g.sonar_gate  # type: ignore[union-attr]
+        anchored = self.fixes is not None and self.fixes.recent(now)  # vision fixes are the height reference
         echo = self._new("sonar", self.sonar)
         if echo is not None:
             rng = echo.range  # type: ignore[attr-defined]
@@ -273,7 +273,7 @@ class FlightEstimator(Estimator):
                 rate = (height - h_prev) / (now - t_prev) if now - t_prev < 0.5 else v[2]
                 self._t_echo, self._last_echo = now, (now, height)
                 e = self.floor_height + height - p[2]
-                if abs(e) < gate and abs(rate - v[2]) < g.sonar_rate_gate:  # an echo off the floor
+                if not anchored and abs(e) < g.sonar_gate and abs(rate - v[2]) < g.sonar_rate_gate:  # off the floor
                     k = self.sonar.period * min(1.0, g.sonar_soft / abs(e)) if e else 0.0
                     p[2] += 2.0 * g.sonar_omega * k * e
                     v[2] += g.sonar_omega**2 * k * e
