@@ -75,10 +75,11 @@ def _fusion_with_history(t_end=1.0, rate=120.0):
 def test_a_late_fix_is_compared_with_the_estimate_at_its_stamp():
     fusion, source = _fusion_with_history()
     source.deliver(VisionFix(0.8, (0.42, 0.0, 1.0), 0.0))  # the estimate read 0.40 at 0.8 s, 0.50 now
-    dpx, dpy, dpz, dvx, _, _, dyaw = fusion.poll()
+    dpx, dpy, dpz, dvx, _, _, dyaw, dbx, _, _ = fusion.poll()
     g = fusion.gains
     assert math.isclose(dpx, g.position * g.max_dt * 0.02, rel_tol=1e-6)  # innovation +2 cm (not -8 cm against now)
     assert math.isclose(dvx, g.velocity * g.max_dt * 0.02, rel_tol=1e-6) and dpy == dpz == dyaw == 0.0
+    assert math.isclose(dbx, -g.bias * g.max_dt * 0.02, rel_tol=1e-6)  # the accelerometer bias, too
     assert fusion.poll() is None  # the same message is fused once
 
 
@@ -92,6 +93,6 @@ def test_flow_outliers_are_gated_only_while_fixes_are_recent():
     assert not fusion.flow_rejected(0.9 + fusion.gains.timeout + 0.01, 0.5, 0.0)  # fixes no longer recent
     far, source_far = _fusion_with_history()
     source_far.deliver(VisionFix(0.9, (1.45, 0.0, 1.0), 0.0))  # 1 m off: an offset of the frame, not converged
-    dpx, _, _, dvx, _, _, _ = far.poll()
+    dpx, _, _, dvx, _, _, _, dbx, _, _ = far.poll()
     assert math.isclose(dpx, far.gains.position * far.gains.max_dt * far.gains.innovation_limit, rel_tol=1e-6)
-    assert dvx == 0.0 and not far.flow_rejected(1.0, 0.5, 0.0)
+    assert dvx == dbx == 0.0 and not far.flow_rejected(1.0, 0.5, 0.0)

@@ -18,7 +18,9 @@ heading relative to M (:func:`body_velocity`): a frame the UAV knows,
 whatever the drift between its odometry frame and the carrier's navigation
 frame. ``p_uav_M`` is the UAV pose in M of :mod:`.relative_pose` (the two
 robots' estimates over the team link, re-anchored by the eye-in-hand
-measurement P_Q^M of eq. (1)).
+measurement P_Q^M of eq. (1)). The autopilot flies the command on the UAV's
+velocity estimate, which the carrier's vision fixes (:mod:`.relative_pose`)
+hold in the carrier's navigation frame, the frame of the feed-forward.
 """
 
 from __future__ import annotations

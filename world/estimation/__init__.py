@@ -4,7 +4,9 @@ Estimators live on the world side (their robot feeds them its sensors) and
 are read by skills only through the onboard interface
 (:mod:`marsupial.world.onboard`). :mod:`.base` has the estimate type,
 :mod:`.flight` the quadrotors' IMU + optical-flow + sonar + barometer
-estimator, :mod:`.ground` wheel odometry and map localisation.
+estimator, :mod:`.external` the external vision fixes it fuses (a team
+member's camera measuring the UAV, over the team link), :mod:`.ground`
+wheel odometry and map localisation.
 """
 
 from .base import Estimator, StateEstimate

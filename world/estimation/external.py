@@ -26,33 +26,38 @@ correct the same error twice; the innovation ``e`` is applied *now*
 (PX4's output-predictor scheme). Per fix, with ``Δ`` the time since the
 previous fix (at most ``max_dt``)::
 
-    p += k_p Δ e,   v += k_v Δ e,   yaw += k_yaw Δ e_yaw
+    p += k_p Δ e,   v += k_v Δ e,   b −= k_b Δ e,   yaw += k_yaw Δ e_yaw
 
-a second-order complementary filter on position and velocity (critically
-damped at ``k_p = 2ω``, ``k_v = ω²``, ω = 2 rad/s: a time constant of
-0.5 s, slow against the 10–60 Hz fixes and their 0.1–0.2 s delay, fast
-against the flow's drift). A fix farther than ``converged`` from the
-estimate (e.g. the first one after a long flight) is an offset of the
-frame, not a velocity error: it corrects the position (and heading) only,
-with the innovation clipped to ``innovation_limit``, so the estimate moves
-by at most ``k_p · innovation_limit`` m/s, with no jump for the autopilot or
-the carrier's filter.
+a third-order complementary filter on position, velocity and the
+accelerometer bias ``b`` (``k_p = 4 /s``, ``k_v = 4 /s²``: critically
+damped at ω = 2 rad/s, a time constant of 0.5 s, slow against the 10–60 Hz
+fixes and their 0.1–0.2 s delay, fast against the flow's drift; ``k_b =
+2 /s³``). Without the bias term a constant accelerometer bias would leave a
+velocity error of ``k_p/k_v`` times the bias, which the autopilot would fly
+(over the carrier no floor echo and no flow corrects it). A fix farther than ``converged`` from the
+estimate (e.g. the first one after a long flight), horizontally (position
+or heading) or vertically, is an offset of the frame, not a velocity error:
+it corrects that part's position (and heading) only, the innovation clipped
+to ``innovation_limit``, so the estimate moves by at most
+``k_p · innovation_limit`` m/s, with no jump for the autopilot or the
+carrier's filter.
 
-While fixes are recent (the last one at most ``timeout`` s old and
-converged) the estimate trusts the vision-anchored state over the sensors
-that may be looking at the carrier rather than the floor (EKF2's innovation
-gates, tightened because the fixes shrink the uncertainty):
+While fixes are recent (the last one at most ``timeout`` s old) the
+estimate trusts the vision-anchored state over the sensors that may be
+looking at the carrier rather than the floor (EKF2's innovation gates,
+tightened because the fixes shrink the uncertainty):
 
-- optical-flow samples whose innovation exceeds ``flow_gate`` are rejected:
-  the flow measures the velocity over the surface under the camera, and
-  over the carrier's moving deck or arm that is off by about the carrier's
-  speed; ``flow_gate`` (0.15 m/s) is about 3.5σ of the flow's noise at 1 m
-  (0.02 + 0.02 m/s per m of range, ``docs/world.md``);
-- sonar echoes farther than ``sonar_gate`` (0.1 m) from the predicted
-  height are no floor echoes (the carrier's deck, 0.2–0.3 m high, is then
-  never taken for the floor);
-- the barometer's offset is calibrated against the vision-anchored height
-  instead of correcting it.
+- the fixes are the height reference (EKF2's ``EV_HGT``): sonar echoes no
+  longer correct the height (over the carrier an echo off its deck,
+  0.2–0.3 m high, matches a height estimate that low and would hold it
+  there against the fixes) and the barometer's offset is calibrated against
+  the vision-anchored height instead of correcting it;
+- once the last fix was horizontally converged, optical-flow samples whose
+  innovation exceeds ``flow_gate`` are rejected: the flow measures the
+  velocity over the surface under the camera, and over the carrier's
+  moving deck or arm that is off by about the carrier's speed;
+  ``flow_gate`` (0.15 m/s) is about 3.5σ of the flow's noise at 1 m
+  (0.02 + 0.02 m/s per m of range, ``docs/world.md``).
 
 The corrections of position and heading are a shift of the navigation
 frame under the vehicle, not a motion of the vehicle: the estimator
@@ -105,26 +110,26 @@ class VisionFixGains:
     Attributes:
         position: ``k_p`` (1/s), position correction per second per metre of innovation.
         velocity: ``k_v`` (1/s²), velocity correction per second per metre of innovation.
+        bias: ``k_b`` (1/s³), accelerometer-bias correction per second per metre of innovation.
         yaw: ``k_yaw`` (1/s), heading correction per second per radian of innovation.
         innovation_limit: position (m) and heading (rad) innovations are clipped to this length.
-        converged: a fix at most this far (m; heading: rad) from the estimate also corrects the velocity and
-            keeps the gates tight; a farther one corrects the position and heading only.
+        converged: a fix at most this far (m; heading: rad) from the estimate, horizontally or vertically, also
+            corrects that part of the velocity (and, horizontally, gates the flow); a farther one the position only.
         history: how long (s) the estimate's history is kept; older fixes are ignored.
         timeout: fixes count as recent while the last one is at most this old (s).
         flow_gate: while fixes are recent, flow samples with a larger innovation (m/s) are rejected.
-        sonar_gate: while fixes are recent, the sonar's gate (m) on the predicted height.
         max_dt: longest interval (s) between two fixes that a fix's correction is scaled by.
     """
 
     position: float = 4.0
     velocity: float = 4.0
+    bias: float = 2.0
     yaw: float = 2.0
     innovation_limit: float = 0.15
     converged: float = 0.1
     history: float = 0.5
     timeout: float = 0.5
     flow_gate: float = 0.15
-    sonar_gate: float = 0.1
     max_dt: float = 0.2
 
 
@@ -142,7 +147,8 @@ class VisionFixFusion:
             (``[x, y, z, yaw]``, navigation frame; the autopilot follows them with its references).
         fused, stale: numbers of fixes fused and of fixes ignored as older than the history.
         last_stamp: stamp (s) of the last fix fused (−inf: none).
-        converged: True when the last fix was within ``gains.converged`` of the estimate.
+        converged: True when the last fix was horizontally within ``gains.converged`` of the estimate (position
+            and heading).
     """
 
     def __init__(self, source: Callable[[], Any], gains: VisionFixGains = VisionFixGains()):
@@ -172,15 +178,16 @@ class VisionFixFusion:
             history.popleft()
 
     def recent(self, now: float) -> bool:
-        """True while the last fix is at most ``timeout`` s old and converged (flow samples are then gated)."""
-        return self.converged and now - self.last_stamp <= self.gains.timeout
+        """True while the last fix is at most ``timeout`` s old (the height is then vision-anchored)."""
+        return now - self.last_stamp <= self.gains.timeout
 
     def flow_rejected(self, now: float, ex: float, ey: float) -> bool:
         """True when a flow sample of innovation ``(ex, ey)`` (m/s) is an outlier against the vision-anchored velocity."""
-        return ex * ex + ey * ey > self.gains.flow_gate**2 and self.recent(now)
+        return ex * ex + ey * ey > self.gains.flow_gate**2 and self.converged and self.recent(now)
 
-    def poll(self) -> tuple[float, float, float, float, float, float, float] | None:
-        """The correction of a new fix, ``(dpx, dpy, dpz, dvx, dvy, dvz, dyaw)``, or ``None`` (no new fix, or too old).
+    def poll(self) -> tuple[float, ...] | None:
+        """The correction of a new fix, ``(dpx, dpy, dpz, dvx, dvy, dvz, dyaw, dbx, dby, dbz)`` (m, m/s, rad, m/s²;
+        ``db`` is added to the accelerometer-bias estimate), or ``None`` (no new fix, or too old).
 
         The position and heading parts are added to :attr:`shift`; the caller applies all of them.
         """
@@ -199,7 +206,8 @@ class VisionFixFusion:
         ex, ey, ez = fix.position[0] - past[0], fix.position[1] - past[1], fix.position[2] - past[2]
         eyaw = math.remainder(fix.yaw - past[3], math.tau)
         norm = math.sqrt(ex * ex + ey * ey + ez * ez)
-        self.converged = norm <= g.converged and abs(eyaw) <= g.converged
+        self.converged = math.hypot(ex, ey) <= g.converged and abs(eyaw) <= g.converged
+        vertical = abs(ez) <= g.converged
         if norm > g.innovation_limit:
             k = g.innovation_limit / norm
             ex, ey, ez = ex * k, ey * k, ez * k
@@ -209,7 +217,10 @@ class VisionFixFusion:
         self.fused += 1
         kp, kyaw = g.position * dt, g.yaw * dt
         kv = g.velocity * dt if self.converged else 0.0  # a far fix is an offset of the frame
-        correction = (kp * ex, kp * ey, kp * ez, kv * ex, kv * ey, kv * ez, kyaw * eyaw)
+        kvz = g.velocity * dt if vertical else 0.0
+        kb = -g.bias * dt if self.converged else 0.0
+        kbz = -g.bias * dt if vertical else 0.0
+        correction = (kp * ex, kp * ey, kp * ez, kv * ex, kv * ey, kvz * ez, kyaw * eyaw, kb * ex, kb * ey, kbz * ez)
         s = self.shift
         s[0] += correction[0]
         s[1] += correction[1]

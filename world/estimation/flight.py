@@ -28,9 +28,10 @@ complementary filter (plain ``math``; it runs at the autopilot rate,
   is compared with the estimate at its stamp (a short history) and corrects
   position, velocity and heading now; while fixes are recent, flow samples
   that disagree with the vision-anchored velocity by more than a gate (the
-  flow over a moving deck) are rejected, the sonar gate is tightened (no
-  deck echo taken for the floor) and the barometer is calibrated against
-  the anchored height. The position and heading
+  flow over a moving deck) are rejected, the sonar echoes no longer correct
+  the height (they still make it valid for the flow: an echo off the
+  carrier's deck would otherwise be taken for the floor) and the barometer
+  is calibrated against the anchored height. The position and heading
   corrections are cumulated in :attr:`FlightEstimator.shift`, which the
   autopilot follows with its references (the frame moved, not the vehicle).
 - at rest (motors off, or held by a docking device) the estimate is held:
@@ -145,7 +146,7 @@ class FlightEstimator(Estimator):
         self.gains = gains
         self.p = [0.0, 0.0, 0.0]
         self.v = [0.0, 0.0, 0.0]
-        self.bias = [0.0, 0.0]  # m/s², horizontal accelerometer bias estimate (navigation frame)
+        self.bias = [0.0, 0.0, 0.0]  # m/s², accelerometer bias estimate (navigation frame; z: vision fixes only)
         self.resets = 0
         self.fixes = None if vision_fixes is None else VisionFixFusion(vision_fixes, fix_gains)
         self.shift = self.fixes.shift if self.fixes is not None else [0.0, 0.0, 0.0, 0.0]
@@ -213,7 +214,7 @@ class FlightEstimator(Estimator):
         b, v, p = self.bias, self.v, self.p
         ax = r00 * fx + r01 * fy + r02 * fz - b[0]
         ay = r10 * fx + r11 * fy + r12 * fz - b[1]
-        az = r20 * fx + r21 * fy + r22 * fz - GRAVITY
+        az = r20 * fx + r21 * fy + r22 * fz - GRAVITY - b[2]
         v0x, v0y, v0z = v
         v[0] += ax * dt
         v[1] += ay * dt
@@ -261,8 +262,7 @@ class FlightEstimator(Estimator):
     def _correct_height(self, r22: float) -> None:
         """Sonar echoes gated on the expected floor; the barometer when no floor echo is recent."""
         g, now, p, v = self.gains, self.clock.now, self.p, self.v
-        anchored = self.fixes is not None and self.fixes.recent(now)  # vision fixes hold the height
-        gate = min(g.sonar_gate, self.fixes.gains.sonar_gate) if anchored else g.sonar_gate  # type: ignore[union-attr]
+        anchored = self.fixes is not None and self.fixes.recent(now)  # vision fixes are the height reference
         echo = self._new("sonar", self.sonar)
         if echo is not None:
             rng = echo.range  # type: ignore[attr-defined]
@@ -273,7 +273,7 @@ class FlightEstimator(Estimator):
                 rate = (height - h_prev) / (now - t_prev) if now - t_prev < 0.5 else v[2]
                 self._t_echo, self._last_echo = now, (now, height)
                 e = self.floor_height + height - p[2]
-                if abs(e) < gate and abs(rate - v[2]) < g.sonar_rate_gate:  # an echo off the floor
+                if not anchored and abs(e) < g.sonar_gate and abs(rate - v[2]) < g.sonar_rate_gate:  # off the floor
                     k = self.sonar.period * min(1.0, g.sonar_soft / abs(e)) if e else 0.0
                     p[2] += 2.0 * g.sonar_omega * k * e
                     v[2] += g.sonar_omega**2 * k * e
@@ -313,7 +313,11 @@ class FlightEstimator(Estimator):
         fixes, p, v = self.fixes, self.p, self.v
         correction = fixes.poll()  # type: ignore[union-attr]
         if correction is not None:
-            dpx, dpy, dpz, dvx, dvy, dvz, dyaw = correction
+            dpx, dpy, dpz, dvx, dvy, dvz, dyaw, dbx, dby, dbz = correction
+            b = self.bias
+            b[0] += dbx
+            b[1] += dby
+            b[2] += dbz
             p[0] += dpx
             p[1] += dpy
             p[2] += dpz
