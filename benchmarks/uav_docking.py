@@ -2,6 +2,7 @@
 
     python benchmarks/uav_docking.py [--quick] [--workers 2] [--runs DIR] [--encounters 100]
                                      [--out benchmarks/out/uav_docking.json] [--report docs/results/uav_docking.md]
+                                     [--sweep noise|drift|all] [--sweep-seeds 5]
 
 Every mission runs through the campaign runner (``trees/campaign.py``) and
 every figure is computed from the MCAP logs (``trees/replay.py``):
@@ -19,9 +20,18 @@ every figure is computed from the MCAP logs (``trees/replay.py``):
    encounters, 20 combinations of a random UAV start within 1 m of the
    meeting point (5) × a random carrier speed ≤ 0.5 m/s on a 0.05 rad/s arc
    (4), each with 5 seeds (gust directions and timing) of 2 m/s gusts.
-   Success = UAV locked and stored within 60 s; unintended contacts =
-   ``world/contacts.py`` ContactMonitor events of the UAV with any carrier
-   link but Part A (installed by ``track`` for tracking and contact).
+   Success = UAV locked and stored within 60 s; unintended contacts = the
+   run's referee (``world/scoring.py``, on truth) counting touches of the UAV
+   with any carrier link but Part A. The skills see only what the robots
+   sense (the estimates, the camera, the encoders, the device switches); the
+   RMS error of their P_Q^M estimate against truth while tracking is scored
+   here from the log (the logged estimate ``uav_M_estimate`` against the UAV
+   in M from the ``/truth/`` poses and M's URDF mount).
+2b. Sensitivity (``--sweep``): success and encounter→lock time against
+   ``world.sensing.noise_scale`` ∈ {0, 0.5, 1, 2, 4} (``noise``) and against
+   the UAV's odometry drift, the optical-flow noise
+   ``team.uav.sensors.flow.noise_std`` (``drift``), 4 starts × 1 speed ×
+   ``--sweep-seeds`` seeds (≥ 20 encounters) per point, with the P_Q^M RMS.
 3. Speed — the Motion Engine's planning cycle (p50/p95) and IK engine solves/s
    (1 vs 2 workers), measured by ``benchmarks/motion_engine.py``; the
    eye-in-hand camera's cost and the bundle detection at 640×480 and
@@ -35,6 +45,7 @@ figures. Writes the JSON, the Markdown report with PNG plots under
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import os
@@ -53,6 +64,7 @@ from marsupial.trees.campaign import run_campaign
 from marsupial.trees.mission import find_mission
 from marsupial.trees.replay import RunLog, read_log
 from marsupial.trees.runner import run_mission
+from marsupial.geometry import rotation_matrix
 from marsupial.world import World
 from marsupial.world.robots.quadrotor import BEBOP2
 
@@ -65,6 +77,10 @@ DEFAULT_OUT = ROOT / "benchmarks" / "out" / "uav_docking.json"
 DEFAULT_REPORT = ROOT / "docs" / "results" / "uav_docking.md"
 ENCOUNTER = ROOT / "benchmarks" / "missions" / "docking_encounter.yaml"
 MISSION = "usar_docking"
+SWEEPS = {  # --sweep: mission key and its values
+    "noise": ("world.sensing.noise_scale", ("0", "0.5", "1", "2", "4")),
+    "drift": ("team.uav.sensors.flow.noise_std", ("0.02", "0.05", "0.1", "0.2")),  # m/s; 0.02 is the default
+}
 CAPACITY_MAH = BEBOP2.battery.capacity_mAh
 
 PAPER = {  # Narváez et al. 2020, Tables II-III and §V-A (simulation)
@@ -193,8 +209,9 @@ def run_encounters(runs: Path, workers: int, quick: bool) -> dict[str, Any]:
     out = runs / "encounters"
     grid = encounter_grid(quick)
     seeds = 5
-    summary = run_campaign(str(ENCOUNTER), seeds, out, vary=grid, workers=workers, keep_logs="failed")
+    summary = run_campaign(str(ENCOUNTER), seeds, out, vary=grid, workers=workers, keep_logs="all")
     records = json.loads((out / "trials.json").read_text())
+    rms = [v for v in (pose_in_M_rms(read_log(p)) for p in sorted((out / "logs").glob("*.mcap"))) if v is not None]
     times = [r["metrics"]["docking_time[uav]"] for r in records if r["success"] and "docking_time[uav]" in r["metrics"]]
     touches = [r["metrics"].get("unintended_contacts[uav]", 0.0) for r in records]
     return {
@@ -210,11 +227,67 @@ def run_encounters(runs: Path, workers: int, quick: bool) -> dict[str, Any]:
             "max": max(times) if times else None,
         },
         "sim_time_median_s": summary["median_sim_time"],
+        "pose_in_M_rms_m": {"median": statistics.median(rms) if rms else None, "max": max(rms) if rms else None},
         "grid": grid,
         "seeds": seeds,
         "failures": [{"seed": r["seed"], "params": r["params"], "outcome": r["outcome"], "message": r["message"]}
                      for r in records if not r["success"]],
     }
+
+
+@functools.lru_cache(maxsize=1)
+def _model_offsets() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """URDF offsets: M in the carrier's base frame (position, rotation), Part B in the UAV's (scoring side)."""
+    with World() as world:
+        carrier = world.add_robot("mobile_manipulator", "carrier")
+        uav = world.add_robot("bebop2", "uav", pose=[3.0, 0.0, 1.0, 0.0])
+        p_M, R_M = carrier.link_offset("arm_base")
+        return p_M, R_M, uav.link_offset("part_b")[0]
+
+
+def pose_in_M_rms(log: RunLog) -> float | None:
+    """RMS error (m) of the skills' P_Q^M position estimate (metric ``uav_M_estimate``, every tick while tracking) against
+    truth (the ``/truth/`` poses of both robots, interpolated, and M's URDF mount); ``None`` without samples."""
+    if "uav_M_estimate" not in {m["name"] for m in log.metrics}:
+        return None
+    t_e, x = log.metric("uav_M_estimate", robot="uav", axis="x")
+    estimate = np.column_stack([x] + [log.metric("uav_M_estimate", robot="uav", axis=a)[1] for a in "yz"])
+    p_M, R_M, _ = _model_offsets()
+    t_c, p_c, q_c = log.poses("carrier", orientation=True)
+    t_u, p_u = log.poses("uav")
+    docked = [e["t"] for e in log.events_of("state_change") if e.get("phase") == "locked"]
+    errors = []
+    for t, est in zip(t_e, estimate):
+        if docked and t >= docked[0]:
+            break
+        i = int(np.argmin(np.abs(t_c - t)))  # the carrier turns slowly: the nearest logged rotation
+        pc = np.array([np.interp(t, t_c, p_c[:, k]) for k in range(3)])
+        pu = np.array([np.interp(t, t_u, p_u[:, k]) for k in range(3)])
+        R_c = rotation_matrix(q_c[i])
+        true_M = (R_c @ R_M).T @ (pu - (pc + R_c @ p_M))
+        errors.append(float(np.linalg.norm(est - true_M)))
+    return float(np.sqrt(np.mean(np.square(errors)))) if errors else None
+
+
+def run_sweep(runs: Path, workers: int, name: str, seeds: int) -> list[dict[str, Any]]:
+    """Success, encounter→lock time and P_Q^M RMS at each value of one sensing knob (4 starts × 1 speed × ``seeds``)."""
+    key, values = SWEEPS[name]
+    grid = encounter_grid(quick=True)
+    rows = []
+    for value in values:
+        out = runs / f"sweep_{name}_{value}"
+        summary = run_campaign(str(ENCOUNTER), seeds, out, overrides={key: value}, vary=grid, workers=workers, keep_logs="all")
+        records = json.loads((out / "trials.json").read_text())
+        times = [r["metrics"]["docking_time[uav]"] for r in records if r["success"] and "docking_time[uav]" in r["metrics"]]
+        rms = [pose_in_M_rms(read_log(p)) for p in sorted((out / "logs").glob("*.mcap"))]
+        rms = [v for v in rms if v is not None]
+        rows.append({
+            "key": key, "value": value, "trials": len(records), "successes": summary["successes"],
+            "unintended_contacts": int(sum(r["metrics"].get("unintended_contacts[uav]", 0.0) for r in records)),
+            "encounter_to_lock_median_s": statistics.median(times) if times else None,
+            "pose_in_M_rms_m": statistics.median(rms) if rms else None,
+        })
+    return rows
 
 
 # ------------------------------------------------------------------ speed
@@ -349,7 +422,7 @@ def plots(stats: dict[str, Any], logs: dict[str, RunLog], img: Path) -> dict[str
             sa, sb = (t_a >= a) & (t_a <= b), (t_b >= a) & (t_b <= b)
             axes[0, k].plot(t_a[sa] - a, v_a[sa], color=color, lw=2, label=f"Part A {axis}")
             axes[0, k].plot(t_b[sb] - a, v_b[sb], ".", color=color, ms=3, label=f"Part B {axis} (measured)")
-        t_g, gap = log.metric("docking_gap", robot="uav")
+        t_g, gap = log.metric("docking_gap_estimate", robot="uav")
         sg = (t_g >= a) & (t_g <= b)
         axes[1, k].plot(t_g[sg] - a, 100.0 * gap[sg], color="k", label="|P_B − P_A| (estimate)")
         t_o, offset = log.metric("camera_offset", robot="uav")
@@ -390,6 +463,11 @@ def verdicts(results: dict[str, Any]) -> dict[str, tuple[bool, str]]:
     }
 
 
+def _cm(metres: float | None) -> float | None:
+    """Metres to centimetres (``None`` passes)."""
+    return None if metres is None else 100.0 * metres
+
+
 def _f(value: float | None, digits: int = 1) -> str:
     return "—" if value is None else f"{value:.{digits}f}"
 
@@ -427,6 +505,13 @@ def tables(results: dict[str, Any]) -> list[tuple[str, list[str], list[list[str]
          f"{enc['successes']}/{enc['trials']} (Wilson 95 %: {100 * enc['success_rate_ci95'][0]:.0f}–{100 * enc['success_rate_ci95'][1]:.0f} %)"],
         ["unintended UAV–carrier contacts (trials)", "—", f"{enc['unintended_contacts']} ({enc['trials_with_contacts']})"],
         ["encounter → lock, median / p95 / max (s)", "—", f"{_f(t['median'])} / {_f(t['p95'])} / {_f(t['max'])}"],
+        ["RMS error of P_Q^M (estimate vs truth) while tracking, median / max run (cm)", "—",
+         f"{_f(_cm(enc['pose_in_M_rms_m']['median']))} / {_f(_cm(enc['pose_in_M_rms_m']['max']))}"],
+    ]
+    sweeps = [
+        [row["key"], row["value"], f"{row['successes']}/{row['trials']}", str(row["unintended_contacts"]),
+         _f(row["encounter_to_lock_median_s"]), _f(_cm(row["pose_in_M_rms_m"]))]
+        for rows in results.get("sweeps", {}).values() for row in rows
     ]
     c = results["planning_cycle"]
     speed = [
@@ -449,6 +534,10 @@ def tables(results: dict[str, Any]) -> list[tuple[str, list[str], list[list[str]
         ("Table II — times (s)", ["process", "paper (sim)", "ours"], table_ii),
         ("Table III — distances, times, energy", ["", "paper (sim)", "ours"], table_iii),
         ("Randomized docking encounters", ["", "paper", "ours"], encounters),
+    ] + ([
+        ("Sensitivity (4 starts × seeds per point)",
+         ["knob", "value", "locked", "contacts", "encounter → lock median (s)", "P_Q^M RMS (cm)"], sweeps),
+    ] if sweeps else []) + [
         ("Speed", ["", "paper", "ours"], speed),
         ("Eye-in-hand camera: render and bundle detection per frame (median)",
          ["resolution", "distance (m)", "render ms", "detect ms", "found", "error (mm)"], camera),
@@ -561,6 +650,9 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path) -> str:
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Run everything, write the JSON and the report, print the tables; returns the results."""
     parser = campaign_arguments(__doc__.split("\n\n")[0], "20 encounters, quick speed figures", DEFAULT_OUT, DEFAULT_REPORT)
+    parser.add_argument("--sweep", choices=(*SWEEPS, "all"), default=None,
+                        help="also run the sensitivity sweep(s): noise_scale (noise) or the UAV's odometry drift (drift)")
+    parser.add_argument("--sweep-seeds", type=int, default=5, help="seeds per sweep point (× 4 starts; default 5 = 20 encounters)")
     args = parser.parse_args(argv)
     started = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="uav_docking_runs_") as scratch:
@@ -576,6 +668,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         results["camera"] = camera_and_detection(frames=3 if args.quick else 10)
         results["usar"], logs = run_usar(runs, args.workers)
         results["encounters"] = run_encounters(runs, args.workers, args.quick)
+        if args.sweep is not None:
+            names = list(SWEEPS) if args.sweep == "all" else [args.sweep]
+            results["sweeps"] = {name: run_sweep(runs, args.workers, name, args.sweep_seeds) for name in names}
         results["rtf"] = real_time_factor()
         images = plots(results["usar"], logs, args.report.parent / "img")
         results["benchmark_wall_time_s"] = time.perf_counter() - started

@@ -3,7 +3,13 @@
 Each skill declares its typed parameters, the robot kinds it drives and its
 life cycle (start / step / finish); ``finish`` is the base class's: the
 robot is left safe (hovering, wheels stopped) through the arbiter.
-Positions are in the world frame (m), speeds in m/s, times in simulated s.
+
+The skills steer on the robot's own state estimate (``self.robot.estimate()``):
+targets are points of its navigation frame (``odom`` for a quadrotor or
+wheel odometry, ``map`` for a localised carrier), which coincides with the
+world frame at the start the mission declares; as the estimate drifts, so
+does where the robot really arrives. Speeds m/s, times simulated s
+(``self.now``).
 """
 
 from __future__ import annotations
@@ -16,7 +22,6 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.trees.skill import NodeParams, Skill
-from marsupial.world.robots.base import yaw_of
 
 #: robot classes the skills below accept (any kind whose class derives from them)
 AERIAL = ("Quadrotor",)
@@ -33,20 +38,20 @@ class Wait(Skill):
     uses_robot: ClassVar[bool] = False
 
     def start(self) -> None:
-        self._until = self.world.now + self.params.seconds
+        self._until = self.now + self.params.seconds
 
     def step(self) -> Status:
-        left = self._until - self.world.now
+        left = self._until - self.now
         self.feedback_message = f"{max(left, 0.0):.1f} s left"
         return Status.SUCCESS if left <= 1e-9 else Status.RUNNING
 
 
 class Goto(Skill):
-    """Fly a UAV to a world-frame point (proportional velocity command, speed-limited)."""
+    """Fly a UAV to a point of its navigation frame (proportional velocity command on its estimate, speed-limited)."""
 
     class Params(NodeParams):
         target: tuple[float, float, float]
-        """Point to reach, world frame (m)."""
+        """Point to reach (m), in the UAV's navigation frame (the world frame at the start)."""
         tolerance: float = Field(0.15, gt=0.0)
         """Distance (m) at which the point counts as reached."""
         speed: float = Field(1.0, gt=0.0)
@@ -62,8 +67,7 @@ class Goto(Skill):
         self.robot.set_motors(True)
 
     def step(self) -> Status:
-        p, _ = self.robot.pose()
-        error = np.asarray(self.params.target) - p
+        error = np.asarray(self.params.target) - self.robot.estimate().position
         distance = float(np.linalg.norm(error))
         self.feedback_message = f"{distance:.2f} m to go"
         if distance <= self.params.tolerance:
@@ -92,21 +96,21 @@ class Hover(Skill):
     robot_kinds = AERIAL
 
     def start(self) -> None:
-        self._until = self.world.now + self.params.seconds
+        self._until = self.now + self.params.seconds
 
     def step(self) -> Status:
         self.robot.hover()
-        left = self._until - self.world.now
+        left = self._until - self.now
         self.feedback_message = f"hovering, {max(left, 0.0):.1f} s left"
         return Status.SUCCESS if left <= 1e-9 else Status.RUNNING
 
 
 class DriveTo(Skill):
-    """Drive a ground robot to a point of the floor (turn towards it, then drive; unicycle law)."""
+    """Drive a ground robot to a point of the floor (turn towards it, then drive; unicycle law on its estimate)."""
 
     class Params(NodeParams):
         target: tuple[float, float]
-        """Point to reach, world frame (x, y in m)."""
+        """Point to reach (x, y in m), in the robot's navigation frame (the world frame at the start)."""
         tolerance: float = Field(0.2, gt=0.0)
         """Distance (m) at which the point counts as reached."""
         speed: float = Field(0.5, gt=0.0)
@@ -119,13 +123,14 @@ class DriveTo(Skill):
     robot_kinds = GROUND
 
     def step(self) -> Status:
-        p, q = self.robot.pose()
+        estimate = self.robot.estimate()
+        p = estimate.position
         dx, dy = self.params.target[0] - p[0], self.params.target[1] - p[1]
         distance = math.hypot(dx, dy)
         self.feedback_message = f"{distance:.2f} m to go"
         if distance <= self.params.tolerance:
             return Status.SUCCESS
-        heading_error = math.remainder(math.atan2(dy, dx) - yaw_of(q), math.tau)
+        heading_error = math.remainder(math.atan2(dy, dx) - estimate.yaw, math.tau)
         omega = max(-self.params.turn_rate, min(self.params.turn_rate, self.params.heading_gain * heading_error))
         v = min(self.params.speed, distance) * max(0.0, math.cos(heading_error))
         self.robot.drive(v, omega)

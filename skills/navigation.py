@@ -11,6 +11,17 @@ operator"; the UGV's longitudinal speed is limited to 2 m/s, and to
 Not specific to docking: any wheeled robot with a planar ``lidar`` can use
 it, hence this module sits beside the generic skills.
 
+What it senses (the sensing boundary): the robot's pose is its onboard
+estimate (``robot.estimate()``, the carrier's map localisation in
+``usar_docking``: frame ``map``); its speed, the wheel encoders
+(``robot.speed()``); obstacles, the echoes of its LiDAR scan placed with
+the LiDAR's URDF mount and the estimate at the time they are read
+(:mod:`marsupial.sensing`). The guide path is scene knowledge the mission
+declares: a path of the building plan (``context.prior("building_plan")``)
+or way-points in the mission, in the estimate's navigation frame (the world
+frame at the start). Estimation error therefore moves the path relative to
+the walls; the LiDAR avoidance is what keeps the robot off them.
+
 Pipeline, all in numpy:
 
 1. :func:`smooth_path` — Chaikin corner cutting of the guide polyline (the
@@ -35,15 +46,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Annotated, Any
 
 import cv2
 import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.sensing import body_pose, in_nav_frame, scan_in_body, sensor_mount
 from marsupial.trees.skill import NodeParams, Skill
-from marsupial.world.robots.base import yaw_of
 
 MAX_SPEED = 2.0  # m/s, UGV longitudinal speed limit, Narváez §V-B-1
 DOCKING_SPEED = 0.5  # m/s, UGV speed limit during docking, Narváez §V-B-1
@@ -80,7 +91,7 @@ def resample(points: np.ndarray, spacing: float = RESAMPLE_SPACING) -> tuple[np.
 
 
 class PathFollower:
-    """Progress along a smoothed, resampled path and the pure-pursuit look-ahead point (world frame, m).
+    """Progress along a smoothed, resampled path and the pure-pursuit look-ahead point (navigation frame, m).
 
     Args:
         guide: guide polyline ``(n, 2)``.
@@ -353,10 +364,10 @@ class Navigate(Skill):
     """Drive a ground robot along a guide path or operator set-points, avoiding obstacles seen by its LiDAR."""
 
     class Params(NodeParams):
-        path: str | list[tuple[float, float]] | None = "operator_path"
-        """Guide path γ_mm (§V-A): a path name of the scene or [x, y] way-points (m, world); none: set-points only."""
+        path: str | list[Annotated[list[float], Field(min_length=2, max_length=2)]] | None = "operator_path"
+        """Guide path γ_mm (§V-A): a path of the mission's building plan or [x, y] way-points (m, navigation frame); none: set-points only."""
         setpoints_key: str | None = None
-        """Blackboard key of operator set-points ([x, y] or a list of them, m, world, §V-B); they replace the path."""
+        """Blackboard key of operator set-points ([x, y] or a list of them, m, navigation frame, §V-B); they replace the path."""
         max_speed: float = Field(MAX_SPEED, gt=0.0, le=MAX_SPEED)
         """Speed limit (m/s): 2 m/s, UGV longitudinal limit (§V-B-1)."""
         docking_speed: float = Field(DOCKING_SPEED, gt=0.0)
@@ -378,7 +389,7 @@ class Navigate(Skill):
         stuck_timeout: float | None = Field(30.0, gt=0.0)
         """Fail when the progress along the path has not grown by 0.1 m for this long (s); none: never."""
 
-    robot_kinds = ("WheeledRobot",)
+    robot_kinds = ("MobileManipulator",)  # the wheeled robots with a planar LiDAR
     writes = ("{robot}/path_progress",)
 
     @classmethod
@@ -389,25 +400,27 @@ class Navigate(Skill):
 
     def start(self) -> None:
         self.lidar = self.robot.sensor("lidar")
+        self.lidar_mount = sensor_mount(self.robot, "lidar", self.lidar.offset)
         p = self.params
         self.footprint = Footprint(*p.footprint)
         self.settings = PlannerSettings(margin=p.margin)
         self.setpoints: Any = None
         self.follower = self.follower_for_guide()
-        self.last_progress, self.last_progress_time = -1.0, self.world.now
+        self.last_progress, self.last_progress_time = -1.0, self.now
         self.obstacles = np.zeros((0, 2))
+        self.last_scan: Any = None
         self.detour: float | None = None  # direction (rad, robot frame) of the detour around an obstacle
 
     def follower_for_guide(self) -> PathFollower | None:
         """A follower of the guide: the operator's set-points from here if any were written, else the path (or none)."""
-        here = self.robot.footprint_pose()[0][:2]
+        here = self.robot.estimate().position[:2]
         path = self.params.path
         if self.setpoints is not None:
             guide = np.vstack((here, np.asarray(self.setpoints, dtype=float).reshape(-1, 2)))
         elif path is None:
             return None
         else:
-            guide = self.world.scene.path(path) if isinstance(path, str) else np.asarray(path, dtype=float)
+            guide = self.context.prior("building_plan").path(path) if isinstance(path, str) else np.asarray(path, dtype=float)
         follower = PathFollower(guide, self.params.smoothing)
         follower.update(here, window=follower.length)
         return follower
@@ -423,8 +436,8 @@ class Navigate(Skill):
             self.robot.stop()
             self.feedback_message = "waiting for operator set-points"
             return Status.RUNNING
-        position, orientation = self.robot.footprint_pose()
-        xy, yaw = position[:2], yaw_of(orientation)
+        estimate = self.robot.estimate()
+        xy, yaw = estimate.position[:2], estimate.yaw
         s = self.follower.update(xy)
         progress = s / self.follower.length if self.follower.length > 0 else 1.0
         self.write(f"{self.robot_name}/path_progress", progress)
@@ -435,8 +448,8 @@ class Navigate(Skill):
             self.feedback_message = f"path end reached ({to_end:.2f} m)"
             return Status.SUCCESS
         if s > self.last_progress + 0.1:
-            self.last_progress, self.last_progress_time = s, self.world.now
-        elif p.stuck_timeout is not None and self.world.now - self.last_progress_time > p.stuck_timeout:
+            self.last_progress, self.last_progress_time = s, self.now
+        elif p.stuck_timeout is not None and self.now - self.last_progress_time > p.stuck_timeout:
             self.feedback_message = f"blocked at {s:.1f} m of {self.follower.length:.1f} m for {p.stuck_timeout:.0f} s"
             return Status.FAILURE
 
@@ -447,7 +460,7 @@ class Navigate(Skill):
         c, s_ = math.cos(yaw), math.sin(yaw)
         R_robot_world = np.array([[c, s_], [-s_, c]])
         goal_R = R_robot_world @ (self.follower.lookahead(p.lookahead + 0.5 * abs(self.robot.speed())) - xy)
-        obstacles = self.obstacles_in_robot_frame(xy, R_robot_world)
+        obstacles = self.obstacles_in_robot_frame(estimate, R_robot_world)
         goal_R, self.detour = subgoal(goal_R, obstacles, self.footprint.half_width + p.margin, self.detour)
         v_ref, omega_ref = pure_pursuit(goal_R, v_limit, omega_max)
         plan = local_plan(obstacles, goal_R, v_ref, omega_ref, v_limit, omega_max, self.footprint, self.settings)
@@ -458,12 +471,18 @@ class Navigate(Skill):
         )
         return Status.RUNNING
 
-    def obstacles_in_robot_frame(self, xy: np.ndarray, R_robot_world: np.ndarray) -> np.ndarray:
-        """LiDAR echoes within ``sensor_range`` in the robot frame (m); the last scan is kept between samples."""
+    def obstacles_in_robot_frame(self, estimate, R_robot_world: np.ndarray) -> np.ndarray:
+        """LiDAR echoes within ``sensor_range`` in the robot frame (m).
+
+        Each new scan is placed in the navigation frame with the estimate
+        propagated to the scan's stamp, and kept there until the next one.
+        """
         reading = self.lidar.read()
-        if reading is not None:
-            self.obstacles = reading.data.points_world()[:, :2]
-        local = (self.obstacles - xy) @ R_robot_world.T
+        if reading is not None and reading is not self.last_scan:
+            self.last_scan = reading
+            lidar_pose = in_nav_frame(body_pose(estimate, reading.stamp), self.lidar_mount)
+            self.obstacles = scan_in_body(reading.data, lidar_pose)[:, :2]
+        local = (self.obstacles - estimate.position[:2]) @ R_robot_world.T
         return local[np.einsum("ij,ij->i", local, local) <= self.params.sensor_range**2]
 
     def finish(self, status: Status) -> None:

@@ -2,6 +2,7 @@
 
 import textwrap
 
+import numpy as np
 import py_trees
 import pytest
 
@@ -179,10 +180,15 @@ def test_drive_to_brings_a_ground_robot_to_its_target(tmp_path):
     assert result.robots["ugv"]["position"][:2] == pytest.approx([2.0, 1.5], abs=0.2)
 
 
-def test_the_demo_mission_flies_and_lands():
-    result = run_mission("demo_hover", progress=False)
+def test_the_demo_mission_flies_and_lands(tmp_path):
+    result = run_mission("demo_hover", progress=False, log_path=tmp_path / "run.mcap")
     assert result.outcome == "success"
-    assert result.robots["uav"]["position"] == pytest.approx([2.0, 2.0, 0.09], abs=0.05)  # landed
+    log = read_log(tmp_path / "run.mcap")
+    _, estimate = log.poses("uav", estimate=True)
+    _, truth = log.poses("uav")
+    assert estimate[-1] == pytest.approx([2.0, 2.0, 0.15], abs=0.1)  # where the UAV believes it landed (goto's tolerance)
+    assert truth[-1, 2] == pytest.approx(0.09, abs=0.02)  # on the floor
+    assert np.linalg.norm(truth[-1, :2] - [2.0, 2.0]) < 0.35  # where it is: optical-flow drift over 13 s of flight
 
 
 # ---------------------------------------------------------------- compile-time checks
@@ -209,6 +215,13 @@ def test_robot_kind_and_robot_presence_are_checked(tmp_path):
     err = compile_error(tmp_path, "until: {skill: wait}\ncondition: {battery_below: 0.2, robot: ugv}", team=UGV_TEAM)
     assert str(err).endswith("condition 'battery_below' cannot run on 'ugv' (a summit_xl); "
                              "expected a robot whose kind or class is Quadrotor")  # no battery: at compile time
+    err = compile_error(tmp_path, "until: {skill: wait}\ncondition: {obstacle_ahead: 1.0, robot: ugv}", team=UGV_TEAM)
+    assert str(err).endswith("condition 'obstacle_ahead' cannot run on 'ugv' (a summit_xl); "
+                             "expected a robot whose kind or class is MobileManipulator")  # no LiDAR
+    err = compile_error(tmp_path, "skill: navigate\nrobot: ugv", team=UGV_TEAM)
+    assert "cannot run on 'ugv' (a summit_xl)" in str(err)  # navigate avoids obstacles with a LiDAR
+    err = compile_error(tmp_path, "skill: explore\nrobot: uav", team="team:\n  uav: {robot: ardrone2}\n")
+    assert str(err).endswith("expected a robot whose kind or class is one of Bebop2, Tello")  # no front camera
     err = compile_error(tmp_path, "skill: wait\nrobot: uav")
     assert "takes no robot" in str(err)
     two = "team:\n  a: {robot: bebop2}\n  b: {robot: tello}\n"

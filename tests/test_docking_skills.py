@@ -16,7 +16,9 @@ from skill_harness import Harness
 
 from marsupial.skills.uav_docking.contact import K_C, Contact, contact_height
 from marsupial.skills.uav_docking.rendezvous import Rendezvous
-from marsupial.skills.uav_docking.track import PoseFusion, Track, TrackingState, sonar_cone_zones
+from marsupial.skills.uav_docking.relative_pose import RelativePoseFilter
+from marsupial.skills.uav_docking.selection import rot_z
+from marsupial.skills.uav_docking.track import Track, TrackingState, sonar_cone_zones
 from marsupial.skills.uav_docking.zones import ZoneMap
 from marsupial.trees.operator import OperatorChannel
 from marsupial.trees.replay import read_log
@@ -70,7 +72,7 @@ def test_one_docking_locks_the_uav_on_part_a(docking):
     assert touches.max() == 0  # the UAV touched nothing of the carrier but Part A
     # locked: the UAV rides on the arm, its motors off (no battery drain, charging)
     t, soc = log.metric("battery_soc", robot="uav")
-    assert soc[-1] >= soc[t <= locked["t"]][-1]
+    assert np.all(np.diff(soc[t >= locked["t"]]) >= 0.0)
     _, p_uav = log.poses("uav")
     _, p_carrier = log.poses("carrier")
     assert np.linalg.norm(p_uav[-1, :2] - p_carrier[-1, :2]) < 0.4 and 0.6 < p_uav[-1, 2] < 1.3
@@ -84,11 +86,12 @@ def test_contact_follows_the_log_law_of_eq_15(docking):
     z0 = z_C[0]
     np.testing.assert_allclose(z_C, z0 + K_C * np.log(t_values + 1.0), atol=1e-9)  # z_C = z + k_c ln(t_c + 1)
     assert contact_height(z0, 6.0) - z0 == pytest.approx(K_C * math.log(7.0))
-    # the arm follows: Part A's height in M (forward kinematics) trails z_C by the PIDs' lag only
+    # the arm follows: Part A's height in M (forward kinematics of the encoders) trails z_C by the PIDs' lag and
+    # the UAV's own height wander (its autopilot holds a barometer height over the carrier: a few cm)
     t_A, z_A = log.metric("part_a_M", robot="uav", axis="z")
     approach = (t_c > t_c[0] + 0.5) & (t_values < 4.0)
     lag = np.abs(np.interp(t_c[approach], t_A, z_A) - z_C[approach])
-    assert lag.max() < 0.06 and np.mean(lag) < 0.03
+    assert lag.max() < 0.08 and np.mean(lag) < 0.03
     rise = np.interp(t_c[-1], t_A, z_A) - np.interp(t_c[0], t_A, z_A)
     assert rise > 0.25  # Part A rose the whole gap to Part B
 
@@ -138,7 +141,8 @@ def test_an_occlusion_during_contact_cancels_and_asks_for_authorization_again(tm
     at_cancel = gap[np.searchsorted(t, cancel["t"])]
     approach = next(e for e in log.events_of("state_change") if e.get("phase") == "approach")
     dropped = gap[(t > cancel["t"] + 1.5) & (t < cancel["t"] + 3.0)]
-    assert dropped.min() > at_cancel + 0.05 and np.abs(dropped - approach["gap"]).max() < 0.02
+    # (the UAV wanders by centimetres around its hold pose on its own estimate)
+    assert dropped.min() > at_cancel + 0.03 and np.abs(dropped - approach["gap"]).max() < 0.04
 
 
 def test_low_battery_preempts_exploration_and_docks_the_uav(tmp_path):
@@ -172,23 +176,42 @@ def test_the_sonar_cone_is_a_prohibited_zone_around_the_beam_only():
     assert zones.points_free(outside).all()
 
 
-def test_pose_fusion_rejects_outliers_and_carries_the_estimate_with_odometry():
-    fusion = PoseFusion(gain=0.5, gate=0.03, max_rejections=3)
-    T_odo = np.eye(4)
-    assert fusion.estimate(T_odo) is None
-    T_meas = np.eye(4)
-    T_meas[:3, 3] = [0.01, 0.0, 0.0]  # the camera sees the UAV 1 cm off the odometry
-    assert fusion.measure(T_meas, T_odo)
-    T_odo_later = np.eye(4)
-    T_odo_later[:3, 3] = [0.0, 0.2, 0.0]  # the UAV moved 0.2 m (odometry) while the marker was hidden
-    np.testing.assert_allclose(fusion.estimate(T_odo_later)[:3, 3], [0.01, 0.2, 0.0], atol=1e-12)
-    wrong = np.eye(4)
-    wrong[:3, 3] = [0.11, 0.2, 0.0]  # 10 cm off: a wrong pose branch at the image border
-    assert not fusion.measure(wrong, T_odo_later)
-    np.testing.assert_allclose(fusion.estimate(T_odo_later)[:3, 3], [0.01, 0.2, 0.0], atol=1e-12)
-    for _ in range(3):  # the same offset again and again: the estimate itself was wrong, restart
-        fusion.measure(wrong, T_odo_later)
-    assert fusion.measure(wrong, T_odo_later)
-    np.testing.assert_allclose(fusion.estimate(T_odo_later)[:3, 3], [0.11, 0.2, 0.0], atol=1e-12)
+def _pose(x, y, z=0.0, yaw=0.0):
+    T = np.eye(4)
+    T[:3, :3] = rot_z(yaw)
+    T[:3, 3] = [x, y, z]
+    return T
+
+
+def test_relative_pose_filter_carries_the_frame_drift_and_rejects_outliers():
+    f = RelativePoseFilter(gain=0.5, gate=0.03, max_rejections=3)
+    T_N_M = _pose(2.0, 1.0, 0.5, yaw=math.pi / 2)  # the carrier's M in its navigation frame
+    T_O_Q = _pose(2.0, 2.0, 1.5)  # the UAV in its odometry frame
+    # before any frame: both start frames are the mission's world frame
+    np.testing.assert_allclose(f.predict(T_N_M, T_O_Q)[:3, 3], [1.0, 0.0, 1.0], atol=1e-12)
+    # the camera sees the UAV 5 cm and 0.1 rad off what the estimates say: the first frame anchors C exactly
+    measured = _pose(1.05, 0.0, 1.0, yaw=-math.pi / 2 + 0.1)
+    assert f.measure(measured, T_N_M, T_O_Q)
+    np.testing.assert_allclose(f.predict(T_N_M, T_O_Q), measured, atol=1e-12)
+    # the carrier turns and drives on, the UAV flies 0.3 m (both by their estimates): the drift is carried along
+    T_N_M_later = _pose(2.5, 1.0, 0.5, yaw=math.pi / 2 + 0.2)
+    T_O_Q_later = _pose(2.3, 2.0, 1.5)
+    C = f.C.copy()
+    expected = np.linalg.inv(T_N_M_later) @ C @ T_O_Q_later
+    np.testing.assert_allclose(f.predict(T_N_M_later, T_O_Q_later), expected, atol=1e-12)
+    # a measurement 10 cm off the prediction is an outlier and leaves the estimate alone ...
+    wrong = expected.copy()
+    wrong[:3, 3] += [0.1, 0.0, 0.0]
+    assert not f.measure(wrong, T_N_M_later, T_O_Q_later)
+    np.testing.assert_allclose(f.C, C, atol=1e-12)
+    # ... a close one moves it by the gain
+    close = expected.copy()
+    close[:3, 3] += [0.02, 0.0, 0.0]
+    assert f.measure(close, T_N_M_later, T_O_Q_later)
+    np.testing.assert_allclose(f.predict(T_N_M_later, T_O_Q_later)[:3, 3], expected[:3, 3] + [0.01, 0.0, 0.0], atol=1e-12)
+    for _ in range(3):  # the same far pose again and again: the prediction itself was wrong, restart on it
+        assert not f.measure(wrong, T_N_M_later, T_O_Q_later)
+    assert f.measure(wrong, T_N_M_later, T_O_Q_later)
+    np.testing.assert_allclose(f.predict(T_N_M_later, T_O_Q_later)[:3, 3], wrong[:3, 3], atol=1e-12)
     with pytest.raises(ValueError, match="gain"):
-        PoseFusion(gain=0.0)
+        RelativePoseFilter(gain=0.0)

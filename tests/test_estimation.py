@@ -127,6 +127,21 @@ def test_optical_flow_measures_the_velocity_over_the_surface_below():
         assert reading.vx == pytest.approx(uav.velocity()[0][0] - ugv.velocity()[0][0], abs=0.02)
 
 
+def test_a_drone_low_over_a_moving_platform_rides_along_and_believes_it_is_still():
+    """The flow is relative to what fills the view: far above, the floor; just above, the platform."""
+    moved = {}
+    for height in (4.0, 1.2):
+        with World(seed=1) as world:
+            ugv = world.add_robot("summit_xl", pose=[0.0, 0.0, 0.0])
+            uav = world.add_robot("ardrone2", pose=[0.0, 0.0, height, 0.0])
+            ugv.drive(0.5, 0.0)
+            world.step(4.0)
+            moved[height] = (uav.pose()[0][0], uav.estimator.estimate().position[0], ugv.pose()[0][0])
+    assert abs(moved[4.0][0]) < 0.2  # holds over the floor
+    true_x, estimated_x, platform_x = moved[1.2]
+    assert true_x > 0.8 * platform_x and abs(estimated_x) < 0.2  # carried along, unaware
+
+
 # ----------------------------------------------------------- ground robots
 def _odometry_error(seed, distance, noise_scale=1.0, kind="mobile_manipulator"):
     with World(seed=seed, noise_scale=noise_scale) as world:

@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from marsupial.trees import mission as mission_module
+from marsupial.trees.mission import loading as mission_module
 from marsupial.trees.errors import MissionError
 from marsupial.trees.mission import (
     ConditionNode,

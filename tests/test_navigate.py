@@ -7,8 +7,11 @@ from py_trees.common import Status
 from skill_harness import Harness
 
 from marsupial.skills.navigation import Footprint, Navigate, PathFollower, local_plan, smooth_path
+from marsupial.trees.replay import read_log
+from marsupial.trees.runner import run_mission
 from marsupial.world import World
 from marsupial.world.contacts import ContactMonitor
+from marsupial.world.priors import BuildingPlan
 
 
 def add_box(world, center, half_extents):
@@ -47,31 +50,29 @@ def world():
         yield w
 
 
-def test_navigate_drives_around_an_obstacle_on_the_path_without_touching_it(world):
+def test_navigate_drives_around_an_obstacle_on_the_path_without_touching_it(world, tmp_path):
     carrier = world.add_robot("mobile_manipulator", "carrier", pose=[0.0, 0.0, 0.0])
-    box = add_box(world, [3.0, 0.05, 0.5], [0.3, 0.4, 0.5])
+    box = add_box(world, [3.0, 0.05, 0.5], [0.3, 0.4, 0.5])  # not on any plan: only the LiDAR sees it
     monitor = ContactMonitor(world, "carrier", box)
     world.add_actor(monitor)
-    harness = Harness(world)
+    harness = Harness(world, log_path=tmp_path / "run.mcap")
     navigate = harness.node(Navigate, "carrier", path=[[0.0, 0.0], [3.0, 0.0], [6.0, 0.0]])
-    track, progress, speed = [], [], []
-
-    def record():
-        track.append(carrier.footprint_pose()[0][:2].copy())
-        progress.append(harness.blackboard("carrier/path_progress"))
-        speed.append(abs(carrier.speed()))
-
-    assert harness.run(navigate, 30.0, record) == Status.SUCCESS
+    assert harness.run(navigate, 30.0) == Status.SUCCESS
+    world.step(1.5)  # the finished skill stopped the base
+    harness.close()
     assert monitor.events == []
-    track = np.array(track)
-    assert np.linalg.norm(track[-1] - [6.0, 0.0]) <= 0.3
+    log = read_log(tmp_path / "run.mcap")
+    t, p = log.poses("carrier")  # truth, 10 Hz
+    _, estimate = log.poses("carrier", estimate=True)  # wheel odometry
+    track = p[:, :2]
+    assert np.linalg.norm(estimate[-1, :2] - [6.0, 0.0]) <= 0.3  # the end, as the robot believes (goal tolerance)
+    assert np.linalg.norm(track[-1] - [6.0, 0.0]) <= 0.45  # and as it is: odometry drifts ~1-2 % over the 7 m
     assert np.abs(track[:, 1]).max() > 0.6  # went around the box (0.8 m wide, on the path)
     assert np.abs(track[:, 1]).max() < 1.6
+    assert np.max(np.linalg.norm(np.diff(track, axis=0), axis=1) / np.diff(t)) <= 2.0 + 0.05
+    _, progress = log.metric("path_progress", robot="carrier")
     assert np.all(np.diff(progress) >= 0.0) and progress[-1] == pytest.approx(1.0, abs=0.06)
-    assert max(speed) <= 2.0 + 1e-6
-    world.step(1.5)  # the finished skill stopped the base
     assert abs(carrier.speed()) < 0.01
-    assert np.linalg.norm(carrier.footprint_pose()[0][:2] - [6.0, 0.0]) <= 0.6
 
 
 def test_docking_flag_limits_the_speed_to_half_a_metre_per_second(world):
@@ -102,3 +103,28 @@ def test_operator_set_points_replace_the_guide_path(world):
     client.set("/operator/setpoints", [[1.0, 2.5]])
     assert harness.run(navigate, 20.0) == Status.SUCCESS
     assert np.linalg.norm(carrier.footprint_pose()[0][:2] - [1.0, 2.5]) <= 0.3
+
+
+def test_navigate_follows_the_plans_guide_path_through_the_building_on_map_localisation(tmp_path):
+    mission = tmp_path / "m.yaml"
+    mission.write_text(
+        "mission: through_the_building\n"
+        "world: {scene: usar_building, seed: 7}\n"
+        "team:\n"
+        "  carrier: {robot: mobile_manipulator, pose: [-13, -7, 0.73], options: {localization: map},\n"
+        "            sensors: {lidar: {rate_hz: 10, resolution_deg: 1.0}}}\n"
+        "run: {tick_hz: 10, until: 90}\n"
+        "tree: {skill: navigate, robot: carrier, params: {max_speed: 1.0}}\n"
+    )
+    result = run_mission(str(mission), log_path=tmp_path / "run.mcap", progress=False)
+    assert result.outcome == "success", result.message
+    log = read_log(tmp_path / "run.mcap")
+    _, truth = log.poses("carrier")
+    _, estimate = log.poses("carrier", estimate=True)
+    with World(scene="usar_building") as world:
+        plan = BuildingPlan.of(world.scene)
+    end = plan.path("operator_path")[-1]
+    assert np.linalg.norm(truth[-1, :2] - end) < 0.6  # the guide path's end in the target room, through door_6
+    assert np.linalg.norm(truth[:, :2] - estimate[:, :2], axis=1).max() < 0.3  # map localisation: bounded error
+    clearance = min(min(e.distance([x, y, 0.3]) for e in plan.structure) for x, y, _ in truth)
+    assert clearance > 0.19 + 0.2  # the base's half-width (0.19 m) plus room: no wall or jamb grazed

@@ -19,9 +19,14 @@ from marsupial.world import World
 
 # ---------------------------------------------------------------- arbitration
 class StubRobot:
-    """Records the commands it receives."""
+    """Records the commands it receives; it is its own onboard interface."""
 
     name = "r"
+    commands = frozenset({"drive", "safe_stop"})
+
+    @staticmethod
+    def onboard_class(robot):
+        return robot
 
     def __init__(self):
         self.received = []
@@ -206,7 +211,7 @@ def test_obstacle_ahead_preempts_driving(tmp_path):
         mission: obstacle
         world: {scene: open_field}
         team:
-          ugv: {robot: summit_xl, pose: [54, 60, 0]}
+          ugv: {robot: mobile_manipulator, pose: [54, 60, 0]}
         tree:
           priorities:
             - when: {obstacle_ahead: 1.0, robot: ugv}

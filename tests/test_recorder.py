@@ -150,6 +150,7 @@ def test_schema_names_and_encodings_match_foxglove(tmp_path):
         assert schema.name == name and schema.encoding == "jsonschema"
         body = json.loads(schema.data)
         assert body == SCHEMAS[name] and body["title"] == name and body["type"] == "object"
+    assert SCHEMAS["marsupial.Event"]["properties"]["kind"]["enum"] == list(EVENT_KINDS)  # schemas.json knows every kind
     assert {c.message_encoding for c in summary.channels.values()} == {"json"}
     fields = {
         "foxglove.FrameTransform": {"timestamp", "parent_frame_id", "child_frame_id", "translation", "rotation"},

@@ -60,7 +60,7 @@ def test_uav_position_in_M_matches_ground_truth(scene, arm):
         assert error <= 0.015 * range_m, f"{arm}, {distance} m: {error * 1000:.1f} mm off"
         # the UAV's attitude in M is measured as well
         R_error = measured.T_M_Q[:3, :3].T @ T_M_Q[:3, :3]
-        assert np.arccos(np.clip((np.trace(R_error) - 1.0) / 2.0, -1.0, 1.0)) < np.radians(5.0)
+        assert np.arccos(np.clip((np.trace(R_error) - 1.0) / 2.0, -1.0, 1.0)) < np.radians(7.0)  # with pixel noise
         if arm == "tilted":  # eq. (1) read literally, as a sum of the three translations, misses by far
             T_M_F = carrier.arm_kinematics.transform(q, measurement.flange_link)
             p_sum = T_M_F[:3, 3] + measured.T_C_Q[:3, 3] + measurement.T_F_C[:3, 3]

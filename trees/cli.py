@@ -162,36 +162,59 @@ def export(mission: str, fmt: str, output: str | None, sets: tuple[str, ...]) ->
 
 
 @cli.command()
-def skills() -> None:
-    """List installed skills and conditions with their parameters, types, defaults and docs."""
+@click.argument("names", nargs=-1)
+def skills(names: tuple[str, ...]) -> None:
+    """List installed skills and conditions (or only NAMES) with their parameters, types, defaults and docs."""
+    from .errors import one_of, suggest
     from .registry import GROUPS, Registry, installed
 
     console = Console()
     registry = Registry()
-    for kind in GROUPS:
-        for name, providers in installed(kind).items():
-            for provider in providers:
-                title = f"{kind} [bold]{name}[/]  from {provider.distribution}: {provider.target}"
-                table = Table(title=title, title_justify="left")
-                for column in ("parameter", "type", "default", "description"):
-                    table.add_column(column)
-                try:
-                    cls = registry.resolve(kind, name) if len(providers) == 1 else _load(provider.target)
-                except MissionError as err:
-                    console.print(f"{kind} {name} ({provider}): [red]{err}[/]")
-                    continue
-                doc = cls.summary()
-                kinds = "no robot" if not cls.uses_robot else ", ".join(cls.robot_kinds or ("any robot",))
-                table.caption = f"{doc} Robots: {kinds}." + (f" Primary: {cls.primary}." if getattr(cls, "primary", None) else "")
-                table.caption_justify = "left"
-                for field_name, info in cls.Params.model_fields.items():
-                    annotation = _type_text(info.annotation)
-                    default = "(required)" if info.is_required() else repr(info.default)
-                    table.add_row(field_name, annotation, default, info.description or "")
-                for port, keys in (("reads", cls.reads), ("writes", cls.writes)):
-                    if keys:
-                        table.add_row(f"[dim]{port}[/]", "blackboard", ", ".join(keys), "")
-                console.print(table)
+    available = {name: (kind, providers) for kind in GROUPS for name, providers in installed(kind).items()}
+    with bad_input():
+        for wanted in names:
+            if wanted not in available:
+                raise MissionError(f"unknown skill or condition '{wanted}'", expected=one_of(available), suggestion=suggest(wanted, available))
+    for name, (kind, providers) in available.items():
+        if names and name not in names:
+            continue
+        for provider in providers:
+            title = Text.assemble(f"{kind} ", (name, "bold"), f"  from {provider.distribution}: {provider.target}")
+            table = Table(title=title, title_justify="left")
+            for column in ("parameter", "type", "default", "description"):
+                table.add_column(column)
+            try:
+                cls = registry.resolve(kind, name) if len(providers) == 1 else _load(provider.target)
+            except MissionError as err:
+                console.print(Text.assemble(f"{kind} {name} ({provider}): ", (str(err), "red")))
+                continue
+            kinds = "no robot" if not cls.uses_robot else ", ".join(cls.robot_kinds or ("any robot",))
+            primary = f" Primary: {cls.primary}." if getattr(cls, "primary", None) else ""
+            table.caption = Text(f"{cls.summary()} Robots: {kinds}.{primary}")
+            table.caption_justify = "left"
+            for field_name, info in cls.Params.model_fields.items():
+                default = "(required)" if info.is_required() else repr(info.default)
+                table.add_row(*(Text(cell) for cell in (field_name, _type_text(info.annotation), default, info.description or "")))
+            for port, keys in (("reads", cls.reads), ("writes", cls.writes)):
+                if keys:
+                    table.add_row(Text(port, "dim"), "blackboard", Text(", ".join(keys)), "")
+            console.print(table)
+
+
+@cli.command()
+def missions() -> None:
+    """List the missions shipped with the package, with their descriptions."""
+    from .mission import known_missions, load_mission
+
+    table = Table(title="missions (marsupial run NAME)", title_justify="left")
+    for column in ("mission", "robots", "description"):
+        table.add_column(column)
+    for name in known_missions():
+        spec = load_mission(name).spec
+        robots = ", ".join(f"{member}: {m.robot}" for member, m in spec.team.items())
+        first_sentence = " ".join(spec.description.split()).split(". ")[0].rstrip(".")
+        table.add_row(Text(name, "bold"), Text(robots), Text(first_sentence + "."))
+    Console().print(table)
 
 
 def _type_text(annotation: Any) -> str:

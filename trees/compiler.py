@@ -207,7 +207,7 @@ class _Compiler:
         if field_name == getattr(cls, "primary", None):
             info = cls.Params.model_fields[field_name]
             try:  # validate the value alone, so the error points at the condition key
-                TypeAdapter(Annotated[info.annotation, *info.metadata]).validate_python(guard.argument)
+                TypeAdapter(Annotated[(info.annotation, *info.metadata)]).validate_python(guard.argument)
             except ValidationError as alone:
                 return self.mission.validation_error(alone, guard.key_path + (guard.condition,), info.annotation)
         return self.mission.validation_error(exc, guard.key_path + ("params",), cls.Params)

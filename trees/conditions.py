@@ -6,34 +6,44 @@ value of the condition key is its ``primary`` parameter:
 ``{battery_below: 0.2, robot: uav}``, ``{operator: dock}``,
 ``{obstacle_ahead: 1.5, robot: carrier}``, ``{area_explored: 0.8}``,
 ``{difficult_area: 1.0, robot: carrier}``, ``{timer: 120}``.
+
+They decide from what the robots sense (the sensing boundary,
+:mod:`marsupial.world.onboard`): the battery monitor, the LiDAR scan, the
+robot's estimated position against the zones the mission declares
+(:meth:`~marsupial.trees.skill.RunContext.prior`), the blackboard and the
+simulated time.
 """
 
 from __future__ import annotations
 
-import math
 from typing import ClassVar
 
 import numpy as np
-import pybullet
 from pydantic import Field
 
-from marsupial.world.robots.base import yaw_of
+from marsupial.sensing import scan_in_body, sensor_mount
 
 from .skill import Condition, NodeParams
 
 
 class BatteryBelow(Condition):
-    """Holds while the robot's battery state of charge is below a fraction."""
+    """Holds while the robot's battery monitor reads a state of charge below a fraction.
+
+    The gauge reports whole percent (as the vendors' SDKs do), so the
+    condition holds from the first reading below ``100 × threshold`` %; it
+    does not hold before the first reading.
+    """
 
     class Params(NodeParams):
         threshold: float = Field(0.2, ge=0.0, le=1.0)
         """State of charge (fraction 0..1) below which the condition holds."""
 
     primary: ClassVar[str] = "threshold"
-    robot_kinds: ClassVar[tuple[str, ...]] = ("Quadrotor",)  # the robots with a battery model (world/energy.py)
+    robot_kinds: ClassVar[tuple[str, ...]] = ("Quadrotor",)  # the robots with a battery monitor (world/energy.py)
 
     def check(self) -> bool:
-        return self.robot.robot.battery.soc < self.params.threshold
+        status = self.robot.battery()
+        return status is not None and status.soc_percent < 100.0 * self.params.threshold
 
 
 class OperatorSaid(Condition):
@@ -70,43 +80,37 @@ class OperatorSaid(Condition):
 
 
 class ObstacleAhead(Condition):
-    """Holds when something lies in front of a ground robot within a distance.
+    """Holds when the robot's LiDAR sees an echo in front of it within a distance.
 
-    A fan of horizontal rays is cast along the robot's heading at a given
-    height, across the robot's width, starting at the front of its bounding
-    box; the distance is measured from there (m).
+    The corridor is ``width`` wide, centred on the robot's heading, from its
+    front (``front`` m ahead of ``base_footprint``) to ``distance`` m beyond,
+    in the scan plane (for the mobile manipulator's LMS111, 0.36 m above the
+    floor: lower obstacles are not seen). The latest scan counts; none yet:
+    the condition does not hold.
     """
 
     class Params(NodeParams):
         distance: float = Field(1.0, gt=0.0)
         """Look-ahead distance from the robot's front (m)."""
         width: float = Field(0.6, gt=0.0)
-        """Width of the swept corridor (m), centred on the robot."""
-        height: float = Field(0.25, gt=0.0)
-        """Height of the rays above the robot's base origin (m)."""
-        rays: int = Field(7, ge=1)
-        """Number of rays across the width."""
+        """Width of the watched corridor (m), centred on the robot."""
+        front: float = Field(0.23, ge=0.0)
+        """Distance (m) from ``base_footprint`` to the robot's front (Pioneer 3-DX: 0.455 m long)."""
+        sensor: str = "lidar"
+        """The planar LiDAR read (its URDF link has the same name)."""
 
     primary: ClassVar[str] = "distance"
+    robot_kinds: ClassVar[tuple[str, ...]] = ("MobileManipulator",)  # the robots with a LiDAR
 
     def check(self) -> bool:
-        robot = self.robot.robot
-        cid = self.world.client_id
-        p, q = robot.pose()
-        yaw = yaw_of(q)
-        forward = np.array([math.cos(yaw), math.sin(yaw), 0.0])
-        left = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
-        lo, hi = pybullet.getAABB(robot.body_id, physicsClientId=cid)
-        corners = np.array([[x, y, 0.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])])
-        front = float(np.max((corners - [p[0], p[1], 0.0]) @ forward))
-        offsets = np.linspace(-self.params.width / 2, self.params.width / 2, self.params.rays)
-        origin = p + np.array([0.0, 0.0, self.params.height]) + forward * (front + 1e-3)
-        starts = [origin + left * o for o in offsets]
-        ends = [s + forward * self.params.distance for s in starts]
-        hits = pybullet.rayTestBatch(
-            [list(s) for s in starts], [list(e) for e in ends], physicsClientId=cid
-        )
-        return any(h[0] >= 0 and h[0] != robot.body_id for h in hits)
+        p = self.params
+        port = self.robot.sensor(p.sensor)
+        reading = port.read()
+        if reading is None:
+            return False
+        echoes = scan_in_body(reading.data, sensor_mount(self.robot, p.sensor, port.offset))
+        x, y = echoes[:, 0], echoes[:, 1]
+        return bool(np.any((x >= p.front) & (x <= p.front + p.distance) & (np.abs(y) <= 0.5 * p.width)))
 
 
 class AreaExplored(Condition):
@@ -127,33 +131,31 @@ class AreaExplored(Condition):
 
 
 class DifficultArea(Condition):
-    """Holds when the robot is within a distance of a scene zone or object tagged as difficult.
+    """Holds when the robot's estimated position is within a distance of a declared zone or plan element tagged as difficult.
 
-    Zones (``scene.zones``) count by their box, objects by their collision
-    shape; the default tags are corridors and door frames.
+    Zones and plan elements (door frames) come from the building plan the
+    mission declares (``prior("building_plan")``), each by its box in plan
+    view; the position is the robot's onboard estimate, so localisation
+    error shifts where the condition starts to hold. The default tags are
+    corridors and door frames.
     """
 
     class Params(NodeParams):
         distance: float = Field(1.0, ge=0.0)
-        """Distance (m) from the tagged zone or object at which the condition holds."""
+        """Distance (m) from the tagged zone or element at which the condition holds."""
         tags: tuple[str, ...] = ("corridor", "door_frame")
-        """Scene tags that mark difficult areas."""
+        """Tags of the declared zones and plan elements that mark difficult areas."""
 
     primary: ClassVar[str] = "distance"
 
     def check(self) -> bool:
-        robot = self.robot.robot
-        scene = self.world.scene
-        p, _ = robot.pose()
-        for tag in self.params.tags:
-            if scene.zones_at(p[:2], margin=self.params.distance, tag=tag):
-                return True
-            for obj in scene.tagged(tag):
-                if pybullet.getClosestPoints(
-                    robot.body_id, obj.body_id, self.params.distance, physicsClientId=self.world.client_id
-                ):
-                    return True
-        return False
+        plan = self.context.prior("building_plan")
+        xy = self.robot.estimate().position[:2]
+        d = self.params.distance
+        return any(
+            plan.zones_at(xy, margin=d, tag=tag) or any(e.distance(xy) <= d for e in plan.tagged(tag))
+            for tag in self.params.tags
+        )
 
 
 class Timer(Condition):
@@ -167,4 +169,4 @@ class Timer(Condition):
     uses_robot: ClassVar[bool] = False
 
     def check(self) -> bool:
-        return self.world.now + 1e-9 >= self.params.seconds
+        return self.now + 1e-9 >= self.params.seconds

@@ -47,13 +47,13 @@ from __future__ import annotations
 import atexit
 import base64
 import json
-import math
 import re
 import shlex
 import signal
 import sys
 import threading
 from collections.abc import Callable, Mapping, Sequence
+from importlib.resources import files
 from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING, Any
@@ -65,6 +65,16 @@ import marsupial
 
 from .btxml import STATUS_NAMES, to_btcpp_xml, walk
 from .errors import suggest
+from .messages import (
+    WORLD_FRAME,
+    encode,
+    foxglove_time,
+    json_default,
+    ns_of,
+    scene_update,
+    xyz,
+    xyzw,
+)
 
 if TYPE_CHECKING:
     from marsupial.world.world import World
@@ -80,198 +90,10 @@ __all__ = [
 ]
 
 # ---------------------------------------------------------------- schemas
-# JSON Schemas of the Foxglove well-known types we write (same names and
-# field names as Foxglove's published definitions, only the fields used here).
-
-
-def _time(description: str) -> dict[str, Any]:
-    return {
-        "type": "object",
-        "title": "time",
-        "description": description,
-        "properties": {
-            "sec": {"type": "integer", "minimum": 0},
-            "nsec": {"type": "integer", "minimum": 0, "maximum": 999_999_999},
-        },
-    }
-
-
-def _object(title: str, description: str, **properties: Any) -> dict[str, Any]:
-    return {"title": title, "description": description, "type": "object", "properties": properties}
-
-
-def _numbers(title: str, description: str, names: str, unit: str) -> dict[str, Any]:
-    return _object(title, description, **{n: {"type": "number", "description": f"{n} {unit}"} for n in names})
-
-
-def _vector3(description: str) -> dict[str, Any]:
-    return _numbers("foxglove.Vector3", description, "xyz", "coordinate length")
-
-
-def _quaternion(description: str) -> dict[str, Any]:
-    return _numbers("foxglove.Quaternion", description, "xyzw", "value")
-
-
-def _pose(description: str) -> dict[str, Any]:
-    return _object(
-        "foxglove.Pose",
-        description,
-        position=_vector3("Point denoting position in 3D space"),
-        orientation=_quaternion("Quaternion denoting orientation in 3D space"),
-    )
-
-
-def _color(description: str) -> dict[str, Any]:
-    return _numbers("foxglove.Color", description, "rgba", "value between 0 and 1")
-
-
-def _array(items: dict[str, Any], description: str) -> dict[str, Any]:
-    return {"type": "array", "items": items, "description": description}
-
-
-def _enum(title: str, description: str, names: Sequence[str]) -> dict[str, Any]:
-    return {"title": title, "description": description, "oneOf": [{"title": n, "const": i} for i, n in enumerate(names)]}
-
-
-def _primitive(title: str, what: str, **extra: Any) -> dict[str, Any]:
-    return _object(
-        title,
-        f"A primitive representing a {what}",
-        pose=_pose(f"Position of the center of the {what} and its orientation"),
-        size=_vector3(f"Size of the {what} along each axis"),
-        **extra,
-        color=_color(f"Color of the {what}"),
-    )
-
-
-_STRING = {"type": "string"}
-_LEVEL_NAMES = ("UNKNOWN", "DEBUG", "INFO", "WARNING", "ERROR", "FATAL")
-
-_BT_STATUS = {"type": "string", "enum": ["IDLE", "RUNNING", "SUCCESS", "FAILURE"]}
-
-#: schema name -> JSON Schema, for every schema the recorder writes
-SCHEMAS: dict[str, dict[str, Any]] = {
-    "foxglove.FrameTransform": _object(
-        "foxglove.FrameTransform",
-        "A transform between two named coordinate frames in 3D space",
-        timestamp=_time("Timestamp of transform"),
-        parent_frame_id={"type": "string", "description": "Name of the parent frame"},
-        child_frame_id={"type": "string", "description": "Name of the child frame"},
-        translation=_vector3("Translation component of the transform"),
-        rotation=_quaternion("Rotation component of the transform"),
-    ),
-    "foxglove.PoseInFrame": _object(
-        "foxglove.PoseInFrame",
-        "A timestamped pose for an object or reference frame in 3D space",
-        timestamp=_time("Timestamp of pose"),
-        frame_id={"type": "string", "description": "Frame of reference for pose position and orientation"},
-        pose=_pose("Pose in 3D space"),
-    ),
-    "foxglove.SceneUpdate": _object(
-        "foxglove.SceneUpdate",
-        "An update to the entities displayed in a 3D scene",
-        deletions=_array(
-            _object(
-                "foxglove.SceneEntityDeletion",
-                "Command to remove previously published entities",
-                timestamp=_time("Only matching entities earlier than this timestamp are deleted"),
-                type=_enum("foxglove.SceneEntityDeletionType", "Type of deletion", ("MATCHING_ID", "ALL")),
-                id={"type": "string", "description": "Identifier which must match if type is MATCHING_ID"},
-            ),
-            "Scene entities to delete",
-        ),
-        entities=_array(
-            _object(
-                "foxglove.SceneEntity",
-                "A visual element in a 3D scene",
-                timestamp=_time("Timestamp of the entity"),
-                frame_id={"type": "string", "description": "Frame of reference"},
-                id={"type": "string", "description": "Identifier of the entity"},
-                lifetime={
-                    "type": "object",
-                    "title": "duration",
-                    "description": "Time after which the entity is removed (zero: never)",
-                    "properties": {
-                        "sec": {"type": "integer"},
-                        "nsec": {"type": "integer", "minimum": 0, "maximum": 999_999_999},
-                    },
-                },
-                frame_locked={"type": "boolean", "description": "Whether the entity follows frame_id as it moves"},
-                metadata=_array(
-                    _object("foxglove.KeyValuePair", "A key with its associated value", key=_STRING, value=_STRING),
-                    "Additional metadata of the entity",
-                ),
-                cubes=_array(_primitive("foxglove.CubePrimitive", "cube"), "Cube primitives"),
-                spheres=_array(_primitive("foxglove.SpherePrimitive", "sphere"), "Sphere primitives"),
-                cylinders=_array(
-                    _primitive(
-                        "foxglove.CylinderPrimitive",
-                        "cylinder",
-                        bottom_scale={"type": "number", "description": "0-1, ratio of the bottom face diameter"},
-                        top_scale={"type": "number", "description": "0-1, ratio of the top face diameter"},
-                    ),
-                    "Cylinder primitives",
-                ),
-            ),
-            "Scene entities to add or replace",
-        ),
-    ),
-    "foxglove.CompressedImage": _object(
-        "foxglove.CompressedImage",
-        "A compressed image",
-        timestamp=_time("Timestamp of image"),
-        frame_id={"type": "string", "description": "Frame of reference for the image (optical frame)"},
-        data={"type": "string", "contentEncoding": "base64", "description": "Compressed image data"},
-        format={"type": "string", "description": "Image format: jpeg or png"},
-    ),
-    "foxglove.Log": _object(
-        "foxglove.Log",
-        "A log message",
-        timestamp=_time("Timestamp of log message"),
-        level=_enum("foxglove.LogLevel", "Log level", _LEVEL_NAMES),
-        message={"type": "string", "description": "Log message"},
-        name={"type": "string", "description": "Process or node name"},
-        file={"type": "string", "description": "Filename"},
-        line={"type": "integer", "minimum": 0, "description": "Line number in the file"},
-    ),
-    "marsupial.Event": {
-        "title": "marsupial.Event",
-        "description": "A run event: 'kind' plus the fields of that kind (docs/logs.md)",
-        "type": "object",
-        "properties": {"kind": {"type": "string", "enum": None}},  # filled below from EVENT_KINDS
-        "required": ["kind"],
-        "additionalProperties": True,
-    },
-    "marsupial.Metric": _object(
-        "marsupial.Metric",
-        "A named scalar measurement at a simulated time",
-        name={"type": "string", "description": "Metric name"},
-        value={"type": ["number", "null"], "description": "Value (SI units); null if not finite"},
-        labels={"type": "object", "additionalProperties": {"type": "string"}, "description": "Labels"},
-    ),
-    "nav2_msgs/msg/BehaviorTreeLog": _object(
-        "nav2_msgs/msg/BehaviorTreeLog",
-        "Behaviour-tree node status changes since the previous message",
-        timestamp=_time("Time of the snapshot"),
-        event_log=_array(
-            _object(
-                "nav2_msgs/msg/BehaviorTreeStatusChange",
-                "One node's status change",
-                timestamp=_time("Time of the change"),
-                node_name={"type": "string", "description": "Node name"},
-                uid={"type": "integer", "minimum": 1, "description": "Node uid: its _uid in /tree/xml"},
-                previous_status=_BT_STATUS,
-                current_status=_BT_STATUS,
-            ),
-            "Status changes in depth-first node order",
-        ),
-    ),
-    "std_msgs/msg/String": _object(
-        "std_msgs/msg/String",
-        "The behaviour tree as BehaviorTree.CPP v4 XML with _uid attributes",
-        data={"type": "string", "description": "XML text"},
-    ),
-}
+#: schema name -> JSON Schema, for every schema the recorder writes (``trees/schemas.json``: the Foxglove
+#: well-known types with Foxglove's published names and field names, only the fields used here, and ours)
+SCHEMAS: dict[str, dict[str, Any]] = json.loads(files("marsupial.trees").joinpath("schemas.json").read_text())
+_LEVEL_NAMES = tuple(level["title"] for level in SCHEMAS["foxglove.Log"]["properties"]["level"]["oneOf"])
 
 #: event kind -> fields every event of that kind must carry (more are allowed)
 EVENT_KINDS: dict[str, tuple[str, ...]] = {
@@ -282,8 +104,8 @@ EVENT_KINDS: dict[str, tuple[str, ...]] = {
     "outcome": ("node", "skill", "robot", "status", "message"),
     "run_end": ("outcome", "sim_time"),
     "error": ("message",),
+    "unintended_contact": ("uav", "carrier", "uav_link", "carrier_link"),  # the referee (marsupial.world.scoring)
 }
-SCHEMAS["marsupial.Event"]["properties"]["kind"]["enum"] = list(EVENT_KINDS)
 
 #: fixed topic -> schema name (per-robot poses and camera images are added as they appear)
 CHANNEL_SCHEMAS: dict[str, str] = {
@@ -302,7 +124,6 @@ IMAGE_SCHEMA = "foxglove.CompressedImage"  # /<camera>/image
 LOG_LEVELS: dict[str, int] = {name.lower(): value for value, name in enumerate(_LEVEL_NAMES)}
 _EVENT_LEVELS = {"error": LOG_LEVELS["error"], "preemption": LOG_LEVELS["warning"]}
 
-WORLD_FRAME = "world"
 SIGTERM_EXIT_CODE = 128 + signal.SIGTERM  # what a shell reports for a process ended by SIGTERM
 
 
@@ -311,60 +132,6 @@ class Terminated(SystemExit):
 
     def __init__(self) -> None:
         super().__init__(SIGTERM_EXIT_CODE)
-
-
-# ---------------------------------------------------------------- helpers
-def _ns(t: float) -> int:
-    """Simulated seconds -> integer nanoseconds."""
-    return int(round(t * 1e9))
-
-
-def _stamp(ns: int) -> dict[str, int]:
-    return {"sec": ns // 1_000_000_000, "nsec": ns % 1_000_000_000}
-
-
-def _xyz(v: Sequence[float]) -> dict[str, float]:
-    return {"x": float(v[0]), "y": float(v[1]), "z": float(v[2])}
-
-
-def _xyzw(q: Sequence[float]) -> dict[str, float]:
-    return {"x": float(q[0]), "y": float(q[1]), "z": float(q[2]), "w": float(q[3])}
-
-
-def _json_default(value: Any) -> Any:
-    if hasattr(value, "tolist"):  # numpy scalars and arrays
-        return value.tolist()
-    if isinstance(value, (set, frozenset)):
-        return sorted(value, key=str)
-    if isinstance(value, Path):
-        return str(value)
-    if hasattr(value, "model_dump"):  # pydantic models
-        return value.model_dump()
-    if isinstance(value, py_trees.common.Status):
-        return STATUS_NAMES[value]
-    raise TypeError(f"a value of type {type(value).__name__} cannot be logged as JSON")
-
-
-def _finite(value: Any) -> Any:
-    """``value`` with every non-finite float replaced by ``None`` (JSON has no NaN)."""
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
-    if isinstance(value, dict):
-        return {k: _finite(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_finite(v) for v in value]
-    return value
-
-
-_to_json = json.JSONEncoder(separators=(",", ":"), default=_json_default, allow_nan=False).encode
-
-
-def _encode(payload: dict[str, Any]) -> bytes:
-    try:
-        text = _to_json(payload)
-    except ValueError:  # NaN / inf somewhere
-        text = _to_json(_finite(json.loads(json.dumps(payload, default=_json_default))))
-    return text.encode()
 
 
 _BARE = re.compile(r"[^\s\"'=]+")  # strings printed without quotes in event text
@@ -376,7 +143,7 @@ def _field_text(value: Any) -> str:
         return value if _BARE.fullmatch(value) else json.dumps(value, ensure_ascii=False)
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         return repr(value)
-    return json.dumps(value, separators=(",", ":"), default=_json_default, sort_keys=True)
+    return json.dumps(value, separators=(",", ":"), default=json_default, sort_keys=True)
 
 
 def describe_event(kind: str, fields: Mapping[str, Any]) -> str:
@@ -387,7 +154,7 @@ def describe_event(kind: str, fields: Mapping[str, Any]) -> str:
 
 
 def _metadata_text(value: Any) -> str:
-    return value if isinstance(value, str) else json.dumps(value, default=_json_default)
+    return value if isinstance(value, str) else json.dumps(value, default=json_default)
 
 
 class _TreeTrack:
@@ -581,7 +348,7 @@ class Recorder:
 
     def _write(self, topic: str, schema_name: str, ns: int, payload: dict[str, Any]) -> None:
         """Append one message; ``ns`` must not be earlier than the previous message's."""
-        data = _encode(payload)
+        data = encode(payload)
         self._busy = True
         try:
             self._writer.add_message(self._channel(topic, schema_name), ns, data, ns)
@@ -594,7 +361,7 @@ class Recorder:
         """``t`` in ns, checked to be >= 0 and not earlier than the last message; ``None`` once closed."""
         if self._closed:
             return None
-        ns = _ns(t)
+        ns = ns_of(t)
         if ns < 0:
             raise ValueError(f"{what} at t={t!r} s: simulated time starts at 0")
         if ns < self._last_ns:
@@ -616,7 +383,7 @@ class Recorder:
 
     def _write_log(self, ns: int, level: int, message: str, name: str) -> None:
         self._write(
-            "/log", "foxglove.Log", ns, {"timestamp": _stamp(ns), "level": level, "message": message, "name": name}
+            "/log", "foxglove.Log", ns, {"timestamp": foxglove_time(ns), "level": level, "message": message, "name": name}
         )
 
     # ------------------------------------------------------------ public logging
@@ -626,7 +393,8 @@ class Recorder:
         ``kind`` is one of :data:`EVENT_KINDS`; each kind requires its fields
         (``preemption``: preempted, by, why, robot; ``operator``: command,
         source; ``outcome``: node, skill, robot, status, message; ``run_end``:
-        outcome, sim_time; ``error``: message) and may carry more.
+        outcome, sim_time; ``error``: message; ``unintended_contact``: uav,
+        carrier, uav_link, carrier_link) and may carry more.
         ``t`` is simulated seconds.
         """
         required = EVENT_KINDS.get(kind)
@@ -675,16 +443,16 @@ class Recorder:
         ns = self._time(t, "robot poses")
         if ns is None:
             return
-        stamp = _stamp(ns)
+        stamp = foxglove_time(ns)
         for name, (position, quaternion) in (estimates or {}).items():
             self._write(
                 f"/{name}/pose",
                 POSE_SCHEMA,
                 ns,
-                {"timestamp": stamp, "frame_id": WORLD_FRAME, "pose": {"position": _xyz(position), "orientation": _xyzw(quaternion)}},
+                {"timestamp": stamp, "frame_id": WORLD_FRAME, "pose": {"position": xyz(position), "orientation": xyzw(quaternion)}},
             )
         for name, (position, quaternion) in poses.items():
-            translation, rotation = _xyz(position), _xyzw(quaternion)
+            translation, rotation = xyz(position), xyzw(quaternion)
             self._write(
                 "/tf",
                 "foxglove.FrameTransform",
@@ -734,7 +502,7 @@ class Recorder:
         if fresh:
             self._tree = track
             self._write("/tree/xml", "std_msgs/msg/String", ns, {"data": to_btcpp_xml(nodes[0], with_uids=True)})
-        stamp = _stamp(ns)
+        stamp = foxglove_time(ns)
         changes = [
             {
                 "timestamp": stamp,
@@ -751,76 +519,10 @@ class Recorder:
         return True
 
     def log_scene(self, world: World, t: float = 0.0) -> None:
-        """The world's static scene on ``/scene`` (one SceneUpdate): the floor and every scene object.
-
-        Object geometry (box size, cylinder radius/length, sphere radius),
-        colour and pose are read back from pybullet, so they are what the
-        physics simulates. Entity ids are the scene labels (``floor`` for the floor).
-        """
-        import pybullet
-
+        """The world's static scene on ``/scene`` (one SceneUpdate, :func:`~marsupial.trees.messages.scene_update`)."""
         ns = self._time(t, "scene")
-        if ns is None:
-            return
-        stamp = _stamp(ns)
-        cid = world.client_id
-        scene = world.scene
-        entities = []
-        if scene.floor is not None:
-            thickness = 0.02  # m: a thin slab whose top is the floor surface
-            entities.append(
-                self._entity(
-                    stamp,
-                    "floor",
-                    ["floor"],
-                    cubes=[
-                        {
-                            "pose": {
-                                "position": _xyz((0.0, 0.0, scene.floor.height - thickness / 2)),
-                                "orientation": _xyzw((0.0, 0.0, 0.0, 1.0)),
-                            },
-                            "size": _xyz((scene.size[0], scene.size[1], thickness)),
-                            "color": dict(zip("rgba", [c / 255.0 for c in scene.floor.rgb] + [1.0])),
-                        }
-                    ],
-                )
-            )
-        for label, obj in scene.objects.items():
-            position, orientation = pybullet.getBasePositionAndOrientation(obj.body_id, physicsClientId=cid)
-            primitives: dict[str, list[dict[str, Any]]] = {"cubes": [], "spheres": [], "cylinders": []}
-            for shape in pybullet.getVisualShapeData(obj.body_id, physicsClientId=cid):
-                geometry, dims, local_p, local_q, rgba = shape[2], shape[3], shape[5], shape[6], shape[7]
-                p, q = pybullet.multiplyTransforms(position, orientation, local_p, local_q, physicsClientId=cid)
-                if geometry == pybullet.GEOM_BOX:
-                    kind, size = "cubes", dims[:3]
-                elif geometry == pybullet.GEOM_SPHERE:
-                    kind, size = "spheres", (2 * dims[0],) * 3
-                elif geometry == pybullet.GEOM_CYLINDER:
-                    kind, size = "cylinders", (2 * dims[1], 2 * dims[1], dims[0])
-                else:
-                    continue  # meshes/planes are not part of YAML scenes
-                primitive = {"pose": {"position": _xyz(p), "orientation": _xyzw(q)}, "size": _xyz(size)}
-                if kind == "cylinders":
-                    primitive.update(bottom_scale=1.0, top_scale=1.0)
-                primitive["color"] = dict(zip("rgba", map(float, rgba)))
-                primitives[kind].append(primitive)
-            entities.append(self._entity(stamp, label, list(obj.tags), **primitives))
-        self._write("/scene", "foxglove.SceneUpdate", ns, {"deletions": [], "entities": entities})
-
-    @staticmethod
-    def _entity(stamp: dict[str, int], label: str, tags: list[str], **primitives: Any) -> dict[str, Any]:
-        return {
-            "timestamp": stamp,
-            "frame_id": WORLD_FRAME,
-            "id": label,
-            "lifetime": {"sec": 0, "nsec": 0},
-            "frame_locked": False,
-            "metadata": [{"key": "tags", "value": ",".join(tags)}],
-            "cubes": [],
-            "spheres": [],
-            "cylinders": [],
-            **primitives,
-        }
+        if ns is not None:
+            self._write("/scene", "foxglove.SceneUpdate", ns, scene_update(world, foxglove_time(ns)))
 
     def log_image(
         self,
@@ -864,7 +566,7 @@ class Recorder:
         if ns is None:
             return False
         payload = {
-            "timestamp": _stamp(_ns(t if stamp is None else stamp)),
+            "timestamp": foxglove_time(ns_of(t if stamp is None else stamp)),
             "frame_id": frame_id or camera,
             "data": base64.b64encode(encoded.tobytes()).decode("ascii"),
             "format": format,

@@ -35,6 +35,8 @@ import py_trees
 from py_trees.common import Access, Status
 from pydantic import BaseModel, ConfigDict, model_validator
 
+from marsupial.world.errors import UnknownNameError
+
 from .arbitration import Arbiter, CommandPort, Stamp
 
 if TYPE_CHECKING:
@@ -86,7 +88,8 @@ class RunContext:
     The world itself stays behind this object (the sensing boundary, see
     :mod:`marsupial.world.onboard`): nodes get the simulated time
     (:attr:`now`), seeded random streams (:meth:`rng`), each team member's
-    onboard interface (:meth:`onboard`) and the team link (:meth:`link`).
+    onboard interface (:meth:`onboard`), the team link (:meth:`link`) and the
+    scene knowledge the mission declares (:meth:`prior`).
     ``world`` is ``None`` when a tree is compiled only to be drawn or
     exported. Events and metrics go to the recorder (if any) stamped with
     the simulated time; the last value of every metric is kept in
@@ -101,10 +104,12 @@ class RunContext:
 
     def __post_init__(self, world: World | None) -> None:
         self.__world = world
+        self.__plan: Any = None
 
     def attach(self, world: World) -> None:
         """Run the nodes compiled with this context in ``world`` (the runner calls it once the world is built)."""
         self.__world = world
+        self.__plan = None
 
     @property
     def running(self) -> bool:
@@ -151,6 +156,22 @@ class RunContext:
         world = self._require_world(f"team link of '{name}'")
         world.robot(name)  # a clear error for an unknown member
         return LinkPort(world.team_link, name)
+
+    def prior(self, name: str) -> Any:
+        """The scene knowledge named ``name`` that the mission declares (:data:`marsupial.world.priors.PRIORS`).
+
+        ``"building_plan"``: the :class:`~marsupial.world.priors.BuildingPlan`
+        of the mission's scene (walls and door frames, zones, guide paths),
+        copied once from the scene file's declared data, never the bodies.
+        """
+        from marsupial.world.priors import PRIORS, BuildingPlan
+
+        if name not in PRIORS:
+            raise UnknownNameError("prior", name, PRIORS)
+        world = self._require_world(f"prior {name!r}")
+        if self.__plan is None:
+            self.__plan = BuildingPlan.of(world.scene)
+        return self.__plan
 
     def event(self, kind: str, **fields: Any) -> None:
         """Record an event of ``kind`` (``preemption``, ``operator``, …) at the current sim time."""

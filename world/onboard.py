@@ -6,7 +6,9 @@ sensors, the recorder and scoring) plus an onboard interface, built here:
 
 - sensor readings (:class:`SensorPort`: camera images without their true
   pose, depth, LiDAR scans, sonar, IMU, barometer, battery monitor);
-- the robot's state estimate (:class:`~marsupial.world.estimation.StateEstimate`);
+- the robot's state estimate (:class:`~marsupial.world.estimation.StateEstimate`), and the
+  message with which a team member corrects a UAV's
+  (:class:`~marsupial.world.estimation.external.VisionFix`, on the team link);
 - the states its devices report (motor arming, docking switches, magnet,
   lift encoder) and its joint and wheel encoders;
 - its command inputs (the names in :attr:`Onboard.commands`);
@@ -33,6 +35,7 @@ import numpy as np
 from marsupial.geometry import quaternion_from_matrix, rotation_matrix
 
 from .estimation.base import StateEstimate
+from .estimation.external import VisionFix, vision_fix_topic  # noqa: F401 (the message a team member sends a UAV's estimator)
 from .sensors.base import Reading
 from .sensors.lidar import Lidar
 
@@ -284,6 +287,11 @@ class QuadrotorOnboard(BatteryOnboard):
         return bool(self._robot.docked)  # type: ignore[attr-defined]
 
     @property
+    def thrust(self) -> float:
+        """Total rotor thrust (N) the flight controller commands (motor speeds through its rotor model); 0 with the motors off."""
+        return float(self._robot.thrust) if self.motors_on else 0.0  # type: ignore[attr-defined]
+
+    @property
     def limits(self) -> Any:
         """The kind's :class:`~marsupial.world.robots.quadrotor.FlightLimits` (datasheet)."""
         return self._robot.limits  # type: ignore[attr-defined]
@@ -345,7 +353,8 @@ class DockingPort:
     Commands: :meth:`magnet_on`, :meth:`magnet_off`, :meth:`lock`,
     :meth:`release`. Device states: :attr:`magnet` (coil energised),
     :attr:`contact_switch` (Part B seated in the cone: the limit switch
-    under Part A's face), :attr:`locked` (lever end switch), :attr:`locking`.
+    under Part A's face), :attr:`locked` (lever end switch), :attr:`locking`,
+    :attr:`charging` (the charger's current sense).
     """
 
     __slots__ = ("_DockingPort__device",)
@@ -388,6 +397,12 @@ class DockingPort:
     def locking(self) -> bool:
         """True while the levers are closing."""
         return bool(self.__device.locking)
+
+    @property
+    def charging(self) -> bool:
+        """True while the charger delivers current to a locked UAV (the charger's current sense, §V-A)."""
+        uav = self.__device.docked
+        return bool(uav is not None and getattr(uav, "charging", False))
 
     @property
     def state(self) -> str:
@@ -444,12 +459,18 @@ class CarrierOnboard(WheeledOnboard):
         """Joint angles (rad) of a named arm pose."""
         return self._robot.arm_pose(name)  # type: ignore[attr-defined, no-any-return]
 
+    def arm_mount(self) -> tuple[np.ndarray, np.ndarray]:
+        """Frame M (``arm_base``) in the ``base_footprint`` frame the estimate is of: position (m), rotation (URDF)."""
+        p_fp, R_fp = self.link_offset("base_footprint")
+        p_M, R_M = self.link_offset("arm_base")
+        return R_fp.T @ (p_M - p_fp), R_fp.T @ R_M
+
     def arm_base_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """Estimated pose of frame M: the base estimate composed with M's mount in the URDF (position m, quaternion)."""
+        """Estimated pose of frame M: the footprint estimate composed with M's mount in the URDF (position m, quaternion)."""
         estimate = self.estimate()
-        p_M_base, R_base_M = self.link_offset("arm_base")
+        p_M_fp, R_fp_M = self.arm_mount()
         R = estimate.rotation
-        return estimate.position + R @ p_M_base, quaternion_from_matrix(R @ R_base_M)
+        return estimate.position + R @ p_M_fp, quaternion_from_matrix(R @ R_fp_M)
 
 
 def onboard_of(robot: Robot) -> Onboard:

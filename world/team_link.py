@@ -5,7 +5,9 @@ at :attr:`TeamLinkConfig.telemetry_hz`; skills may send their own messages
 (image features, requests) with :meth:`TeamLink.send`. A message is
 delivered ``latency_s`` (plus a seeded jitter) after it was sent, or lost
 with probability ``drop``; a receiver sees the newest delivered message of
-each sender and topic (:meth:`TeamLink.latest`). Simulated time throughout.
+each sender and topic (:meth:`TeamLink.latest`), and of each topic whoever
+sent it (:meth:`TeamLink.latest_on`: what a robot's firmware listening on a
+topic hears, e.g. the vision fixes of a UAV). Simulated time throughout.
 
 Default figures (scaled by ``world.sensing.noise_scale``): 802.11 telemetry
 between robots a few metres apart, 20 ms one-way latency with 10 ms jitter
@@ -68,6 +70,7 @@ class TeamLink:
         self._queue: list[tuple[int, int, Message]] = []
         self._order = itertools.count()
         self._latest: dict[tuple[str, str], Message] = {}
+        self._latest_on: dict[str, Message] = {}
         self._telemetry_period = max(1, world.clock.steps_for(1.0 / self.config.telemetry_hz))
         self.sent = 0
         self.dropped = 0
@@ -88,6 +91,10 @@ class TeamLink:
         """The newest message delivered so far from ``sender`` on ``topic`` (``None``: nothing yet)."""
         return self._latest.get((sender, topic))
 
+    def latest_on(self, topic: str) -> Message | None:
+        """The newest message delivered so far on ``topic`` from any sender (``None``: nothing yet)."""
+        return self._latest_on.get(topic)
+
     # ------------------------------------------------------------ stepping
     def pre_physics(self, dt: float) -> None:
         """Nothing before physics."""
@@ -102,6 +109,9 @@ class TeamLink:
             known = self._latest.get(key)
             if known is None or known.sent <= message.sent:  # a late older message does not replace a newer one
                 self._latest[key] = message
+            known = self._latest_on.get(message.topic)
+            if known is None or known.sent <= message.sent:
+                self._latest_on[message.topic] = message
         if steps % self._telemetry_period == 0:
             for name, robot in self.world.robots.items():
                 estimator = getattr(robot, "estimator", None)  # a rig without an onboard computer sends nothing

@@ -25,24 +25,36 @@ Phases (``state_change`` events with ``phase``):
   push on a misaligned UAV). The UAV's downward sonar cone is a prohibited
   zone of the local map (§IV-B), so the end effector never enters the beam;
 - ``capture`` — Part A holds still within D_c of Part B (the approach stops
-  at ``rest_gap``): the electromagnet pulls Part B into contact, closing the
-  gap to 0 mm (§IV-C, Fig. 12b);
-- ``locking`` — the servo levers close on Part B's ring (Fig. 12c); once
-  locked the docking device stops the UAV's motors (``on_docked``) and the
-  skill succeeds (``locked``, with the metrics ``contact_time`` and
-  ``docking_time``: from the start of tracking to the lock).
+  at ``rest_gap``), both read from the camera's estimate of Part B in Part
+  A's frame (``TrackingState.p_B_A``: the bundle pose by eq. (1) composed
+  with the forward kinematics of the encoders, propagated with the robots'
+  estimates between frames): the electromagnet pulls Part B into contact,
+  closing the gap to 0 mm (§IV-C, Fig. 12b). When the magnet has not
+  seated Part B after ``CAPTURE_TIME`` (the device's contact switch stays
+  open) the capture failed: the magnet goes off and the approach aims
+  ``capture_step`` higher, so an estimate that reads the gap short is
+  closed by the arm;
+- ``locking`` — the contact switch closed: the servo levers close on Part
+  B's ring (Fig. 12c); once the lever end switch reports the lock and the
+  docking device stops the UAV's motors, the skill succeeds (``locked``,
+  with the metrics ``contact_time`` and ``docking_time``: from the start of
+  tracking to the lock).
 
 The eq. (15) samples are logged as the metrics ``contact_t`` (t_c) and
 ``contact_z_C`` (z_C of Part A in M).
 
 Losing the marker for ``lost_timeout`` while Part B is farther than
-``blind_range`` (closer than that the camera is too near the bundle to see
-it, and the pose estimate carries on with the odometry), or an approach
+``blind_range``, or for ``blind_timeout`` closer than that (the camera is
+too near the bundle to see all of it; the pose estimate carries on with the
+two robots' estimates, whose drift grows with the time), or an approach
 longer than ``timeout``, cancels the contact (``contact_cancelled``): the
 magnet goes off, the target is withdrawn so that the end effector drops back
 to the tracking standoff to regain sight, and authorization is requested
 again ("for safety, the contact authorization is requested after any
 cancellation", §IV-B). After ``max_cancellations`` the skill fails.
+
+Every decision reads the device's states (coil, contact switch, lever end
+switch) or the camera's estimate; none reads the true gap.
 """
 
 from __future__ import annotations
@@ -83,18 +95,23 @@ class Contact(Skill):
         """Largest UAV distance from its hold pose in M and camera offset from the bundle (m) to begin the approach."""
         settle_time: float = Field(0.5, ge=0.0)
         """Time (s) tracking must stay settled before the approach begins."""
-        blind_range: float = Field(0.18, ge=0.0)
+        blind_range: float = Field(0.22, ge=0.0)
         """Gap (m) between Part A and Part B below which an unseen marker is expected (the camera is too close)."""
         lost_timeout: float = Field(0.3, gt=0.0)
         """Time (s) without the marker, farther than ``blind_range``, that cancels the contact."""
+        blind_timeout: float = Field(6.0, gt=0.0)
+        """Time (s) without the marker, within ``blind_range``, that cancels the contact (the estimates' drift since the last frame)."""
         align_gap: float = Field(0.03, ge=0.0)
         """Gap (m) the approach holds until Part B is within ``align_tolerance`` of Part A's axis (no push on a misaligned UAV)."""
         align_tolerance: float = Field(0.008, gt=0.0)
         """Lateral offset (m) of Part B from Part A's axis within which the last ``align_gap`` is closed (inside the magnet's 10 mm reach)."""
-        D_c: float = Field(0.006, gt=0.0)
-        """Gap D_c (m) at which the electromagnet is switched on, §IV-C (within its 10 mm reach; it closes the gap to 0 mm)."""
+        D_c: float = Field(0.010, gt=0.0)
+        """Estimated gap D_c (m) at which the electromagnet is switched on, §IV-C: its 10 mm reach (it closes the gap to 0 mm); a gap
+        the estimate reads short is caught by the capture retry."""
         rest_gap: float = Field(0.005, ge=0.0)
         """Gap (m) at which Part A stops below Part B (inside D_c): the magnet, not the arm, makes the contact."""
+        capture_step: float = Field(0.004, ge=0.0)
+        """After each failed capture the approach aims this much (m) higher (down to ``-2·capture_step`` below the estimated face)."""
         sonar_cone: bool = True
         """Map the UAV's downward range-finder cone as a prohibited zone (§IV-B)."""
         timeout: float = Field(30.0, gt=0.0)
@@ -118,14 +135,14 @@ class Contact(Skill):
         sonar = self.robot.sensor("sonar")
         self.sonar = (sonar.half_angle, sonar.max_range)
         self.cancellations = 0
+        self.failed_captures = 0
         self.key = f"{self.params.carrier}/{CONTACT_TARGET}"
         self.write(self.key, None)
         self.request_authorization("contact requested")
 
     def step(self) -> Status:
-        uav = self.robot.robot
         state: TrackingState | None = self.read(f"{self.params.carrier}/{TRACKING}")
-        if self.device.docked is uav:
+        if self.device.locked and self.robot.docked:  # the lever end switch and the UAV's dock-lock signal
             return self.locked(state)
         if self.phase == "authorization_requested":
             return self.await_authorization()
@@ -136,7 +153,7 @@ class Contact(Skill):
     def finish(self, status: Status) -> None:
         if status != Status.SUCCESS:
             self.device.magnet_off()
-            if self.device.docked is not self.robot.robot:
+            if not self.device.locked:
                 self.write(f"{self.params.carrier}/{DOCKING_FLAG}", False)
         self.write(self.key, None)
         self.leave_safe()
@@ -168,7 +185,7 @@ class Contact(Skill):
     def settle(self, state: TrackingState | None) -> Status:
         """Wait for stable tracking under the UAV before the approach (P_R is the start of eq. 15)."""
         p = self.params
-        now = self.world.now
+        now = self.now
         settled = (
             state is not None and state.seen and state.p_B_A is not None
             and state.hold_error <= p.settle_error and state.camera_offset <= p.settle_error
@@ -185,64 +202,68 @@ class Contact(Skill):
         self.t_c, self.last_t = 0.0, now
         self.last_axial, self.last_tick = math.inf, now
         self.cone = None  # the sonar beam, from the UAV down to the floor (§IV-B)
-        if p.sonar_cone:
-            height = float(self.robot.pose()[0][2]) - self.world.scene.floor.height
-            self.cone = (self.sonar[0], min(self.sonar[1], height))
+        if p.sonar_cone:  # the beam down to its echo (the floor), as the sonar reads it
+            reading = self.robot.sensor("sonar").read()
+            echo = reading.data.range if reading is not None else math.inf
+            self.cone = (self.sonar[0], min(self.sonar[1], echo))
         q = self.carrier.joint_positions()
         self.z0 = float(self.carrier.arm_kinematics.forward(q, PART_A_LINK)[0][2])  # z of P_R in M, eq. (15)
         phase_event(self, "approach", gap=round(self.s0, 4), k_c=p.k_c)
         return self.approach(state)
 
     def approach(self, state: TrackingState | None) -> Status:
-        """Eq. (15) on the standoff; at D_c the magnet and the levers; cancel when the marker is lost far away."""
+        """Eq. (15) on the standoff; at D_c (camera estimate) the magnet, on the contact switch the levers; cancel when blind too long."""
         p = self.params
-        now = self.world.now
-        uav = self.robot.robot
-        gap = float(state.p_B_A[2]) if state is not None and state.p_B_A is not None else math.inf
-        if state is None or (not state.seen and state.age() > p.lost_timeout and gap > p.blind_range):
-            return self.cancel(f"marker lost {gap:.2f} m from Part B")
+        now = self.now
+        p_B_A = state.p_B_A if state is not None else None
+        gap = float(p_B_A[2]) if p_B_A is not None else math.inf
+        if state is None or p_B_A is None:
+            return self.cancel("no estimate of Part B")
+        if not state.seen and state.age() > (p.blind_timeout if gap <= p.blind_range else p.lost_timeout):
+            return self.cancel(f"marker lost {gap:.2f} m from Part B ({state.age():.1f} s unseen)")
         if now - self.t0 > p.timeout:
             return self.cancel(f"no lock after {p.timeout:.0f} s of approach")
-        lateral = math.hypot(*state.p_B_A[:2]) if state.p_B_A is not None else math.inf
+        lateral = math.hypot(float(p_B_A[0]), float(p_B_A[1]))
         aligned = lateral <= p.align_tolerance
         if aligned or self.s0 - p.k_c * math.log(self.t_c + 1.0) > p.align_gap:  # the contact clock t_c
             self.t_c += now - self.last_t
         self.last_t = now
-        standoff = max(self.s0 - p.k_c * math.log(self.t_c + 1.0), p.rest_gap)  # eq. (15) as the gap P_RC leaves
+        rest = max(p.rest_gap - p.capture_step * self.failed_captures, -2.0 * p.capture_step)
+        standoff = max(self.s0 - p.k_c * math.log(self.t_c + 1.0), rest)  # eq. (15) as the gap P_RC leaves
         if not aligned:
             standoff = max(standoff, p.align_gap)
-        distance = self.device.distance_to(uav)
-        axial = self.device.offset_to(uav)[0]
-        settled = abs(axial - self.last_axial) <= SETTLED_SPEED * max(now - self.last_tick, 1e-9)
-        self.last_axial, self.last_tick = axial, now
-        within = axial <= p.D_c and distance <= self.device.capture_distance
-        if self.phase == "approach" and within and settled:
+        settled = abs(gap - self.last_axial) <= SETTLED_SPEED * max(now - self.last_tick, 1e-9)
+        self.last_axial, self.last_tick = gap, now
+        switch = self.device.contact_switch
+        if self.phase == "approach" and (switch or (gap <= p.D_c and aligned and settled)):
             self.device.magnet_on()  # Fig. 12b: Part A holds still at D_c, the magnet forces the initial contact
             self.phase, self.captured_at = "capture", now
-            phase_event(self, "capture", t_c=round(self.t_c, 3), distance=round(distance, 4))
-        elif self.phase == "capture" and now - self.captured_at > CAPTURE_TIME:  # off-centre on the face: try again
+            phase_event(self, "capture", t_c=round(self.t_c, 3), gap_estimate=round(gap, 4), contact_switch=switch)
+        elif self.phase == "capture" and not switch and now - self.captured_at > CAPTURE_TIME:  # not seated: aim higher
             self.device.magnet_off()
             self.phase = "approach"
-            phase_event(self, "capture_failed", distance=round(distance, 4))
-        elif self.phase != "approach" and distance > 2.0 * self.device.capture_distance:  # Part B got away
-            self.device.magnet_off()
+            self.failed_captures += 1
+            phase_event(self, "capture_failed", gap_estimate=round(gap, 4), failed=self.failed_captures)
+        elif self.phase == "locking" and not switch and not self.device.locking and gap > 2.0 * self.device.capture_distance:
+            self.device.magnet_off()  # Part B got away from the face before the levers held it
             self.phase = "approach"
-            phase_event(self, "capture_lost", distance=round(distance, 4))
-        if self.phase == "capture" and self.device.in_contact(uav) and self.device.lock():
-            self.phase = "locking"  # Fig. 12c: the levers close on Part B's ring
+            phase_event(self, "capture_lost", gap_estimate=round(gap, 4))
+        if self.phase == "capture" and switch and self.device.lock():
+            self.phase = "locking"  # Fig. 12c: the contact switch is closed, the levers close on Part B's ring
             phase_event(self, "locking", t_c=round(self.t_c, 3))
-        elif self.phase == "locking" and not self.device.locking:  # the levers closed on nothing: try again
+        elif self.phase == "locking" and not self.device.locking and not self.device.locked:  # closed on nothing
             self.phase = "capture"
-            phase_event(self, "lock_failed", distance=round(distance, 4))
+            self.captured_at = now
+            phase_event(self, "lock_failed", gap_estimate=round(gap, 4))
         self.write(self.key, ContactTarget(standoff, self.cone))
         self.context.metric("contact_t", self.t_c, robot=self.robot_name)
         self.context.metric("contact_z_C", contact_height(self.z0, self.t_c, p.k_c), robot=self.robot_name)
-        self.feedback_message = f"{self.phase}: t_c {self.t_c:.1f} s, gap {distance:.3f} m (target {standoff:.3f} m)"
+        self.feedback_message = f"{self.phase}: t_c {self.t_c:.1f} s, estimated gap {gap:.3f} m (target {standoff:.3f} m)"
         return Status.RUNNING
 
     def locked(self, state: TrackingState | None) -> Status:
         """Docked: record the contact time t_c and the docking time (from the start of tracking), succeed."""
-        now = self.world.now
+        now = self.now
         fields = {"t_c": round(self.t_c, 3) if self.t0 is not None else None}
         if self.t0 is not None:
             self.context.metric("contact_time", now - self.t0, robot=self.robot_name)
@@ -280,4 +301,4 @@ class Stored(Condition):
     def check(self) -> bool:
         device = carrier_port(self, self.params.carrier).docking
         busy = bool(self.read(f"{self.params.carrier}/{DOCKING_FLAG}", False))
-        return device.docked is self.robot.robot and not busy
+        return device.locked and self.robot.docked and not busy

@@ -1,23 +1,31 @@
 """Coverage of the rooms around the team by the exploring UAV: flight map, what has been seen, where to go next.
 
-Plain numpy/OpenCV on a plan-view grid of the scene (world x, y; ``cell`` m):
+Plain numpy/OpenCV on a plan-view grid of the mission's building plan
+(navigation frame x, y — the world frame at the start; ``cell`` m):
 
-- :class:`FlightMap` — the scene's obstacles at the flight height (every
-  object whose vertical extent meets the flight band), grown by the UAV's
-  clearance; the cells of the area to survey (scene zones with the given
-  tags — rooms, hall, corridor — or every cell when the scene has none).
-  The building map is known in outline, as the paper allows ("in some cases,
-  a building map is available", §V-A).
-- :func:`visible_cells` — the cells the front camera surveys from one frame:
-  the horizontal range profile of its depth image (the row looking level)
-  bounds a visibility fan, so walls hide what is behind them.
+- :class:`FlightMap` — the plan's walls and door frames at the flight
+  height (every element whose vertical extent meets the flight band), grown
+  by the UAV's clearance; the cells of the area to survey (declared zones
+  with the given tags — rooms, hall, corridor — or every cell when the plan
+  has none). The building map is known in outline, as the paper allows ("in
+  some cases, a building map is available", §V-A): it is the prior the
+  mission declares (``context.prior("building_plan")``); debris is not on it.
+- :func:`view_bearings` and :func:`plan_ranges` — the front camera's
+  horizontal field of view (its level image row, through the camera pose
+  the UAV estimates) and the free range along each bearing up to the first
+  wall of the plan. The Bebop 2's front camera measures no depth, so the
+  plan, not the image, bounds what a frame surveys;
+- :func:`visible_cells` — the cells inside that visibility fan, so walls
+  hide what is behind them.
 - :func:`geodesic` — Dijkstra distances and parents over free cells inside
   an allowed mask (the D_team disc around the carrier).
 - :func:`shortcut` — straight-line pruning of a grid path over free cells.
 - :func:`next_goal` — frontier-like choice: the reachable cell maximising
   the unsurveyed target cells around it, discounted by its path length.
-- :func:`target_in_view` — whether an object is in a camera frame and not
-  hidden (geometric check against the depth image).
+- :func:`detect_colour` — the largest blob of a declared colour in an RGB
+  frame (HSV thresholds, OpenCV connected components), and
+  :func:`floor_point` — where the ray through its lowest pixel meets the
+  floor (a monocular range for an object lying on the floor).
 """
 
 from __future__ import annotations
@@ -30,7 +38,6 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from marsupial.world.robots.base import rotation_matrix
 
 _NEIGHBOURS = [(-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)]
 
@@ -43,17 +50,19 @@ class FlightMap:
         lo: world x, y (m) of the grid's corner; cell: cell side (m).
         blocked: obstacles grown by the UAV's clearance (bool ``(nx, ny)``).
         area: cells of the area to survey (bool ``(nx, ny)``).
+        walls: the plan's elements at the flight height, not grown (bool ``(nx, ny)``): what hides the view.
     """
 
     lo: np.ndarray
     cell: float
     blocked: np.ndarray
     area: np.ndarray
+    walls: np.ndarray
 
     @classmethod
-    def from_scene(
+    def from_plan(
         cls,
-        scene,
+        plan,
         height: float,
         band: float,
         clearance: float,
@@ -61,24 +70,24 @@ class FlightMap:
         cell: float = 0.25,
         extent: tuple[np.ndarray, np.ndarray] | None = None,
     ) -> FlightMap:
-        """The map of ``scene`` for flight at ``height`` ± ``band`` (m), obstacles grown by ``clearance`` (m).
+        """The map of a building ``plan`` for flight at ``height`` ± ``band`` (m), obstacles grown by ``clearance`` (m).
 
-        The grid spans the scene's size (centred on the origin), its objects
-        and zones, and ``extent`` (``(lo, hi)`` world x, y) if given.
+        The grid spans the plan's size (centred on the origin), its elements
+        and zones, and ``extent`` (``(lo, hi)`` x, y) if given.
         """
-        lows = [-0.5 * np.asarray(scene.size, dtype=float)]
-        highs = [0.5 * np.asarray(scene.size, dtype=float)]
+        lows = [-0.5 * np.asarray(plan.size, dtype=float)]
+        highs = [0.5 * np.asarray(plan.size, dtype=float)]
         if extent is not None:
             lows.append(np.asarray(extent[0], dtype=float))
             highs.append(np.asarray(extent[1], dtype=float))
         footprints = []
-        for obj in scene.objects.values():
-            corners = _box_corners(obj.position, obj.orientation, obj.size)
+        for element in plan.structure:
+            corners = element.corners()
             lows.append(corners[:, :2].min(axis=0))
             highs.append(corners[:, :2].max(axis=0))
             if corners[:, 2].min() <= height + band and corners[:, 2].max() >= height - band:
                 footprints.append(cv2.convexHull(corners[:, :2].astype(np.float32)).reshape(-1, 2))
-        for zone in scene.zones.values():
+        for zone in plan.zones:
             lows.append(np.asarray(zone.lo[:2]))
             highs.append(np.asarray(zone.hi[:2]))
         lo = np.min(lows, axis=0) - clearance - cell
@@ -91,9 +100,9 @@ class FlightMap:
         radius = int(math.ceil(clearance / cell))
         kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius + 1, 2 * radius + 1))
         blocked = cv2.dilate(occupied, kernel).astype(bool)
-        grid = cls(lo, cell, blocked, np.zeros(shape, dtype=bool))
+        grid = cls(lo, cell, blocked, np.zeros(shape, dtype=bool), occupied.astype(bool))
         tags = set(area_tags)
-        zones = [z for z in scene.zones.values() if tags & set(z.tags)]
+        zones = [z for z in plan.zones if tags & set(z.tags)]
         if zones:
             x, y = grid.centers()
             for zone in zones:
@@ -142,13 +151,6 @@ class FlightMap:
         i = np.round(np.linspace(a[0], b[0], n)).astype(int)
         j = np.round(np.linspace(a[1], b[1], n)).astype(int)
         return not self.blocked[i, j].any()
-
-
-def _box_corners(position, orientation, size) -> np.ndarray:
-    """The 8 corners (m, world) of an object's box (a cylinder's or sphere's bounding box)."""
-    half = 0.5 * np.asarray(size, dtype=float)
-    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
-    return np.asarray(position) + (signs * half) @ rotation_matrix(orientation).T
 
 
 def geodesic(grid: FlightMap, start: tuple[int, int], allowed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -238,27 +240,41 @@ def visible_cells(
     return inside & (distance <= np.minimum(ranges[k], view_range) + 0.5 * grid.cell)
 
 
-def level_ranges(depth: np.ndarray, K: np.ndarray, R_world_optical: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Bearings (rad, world, increasing) and horizontal free ranges (m) of a camera's level view.
+def view_bearings(K: np.ndarray, width: int, R_nav_optical: np.ndarray) -> np.ndarray:
+    """Bearings (rad, navigation frame, increasing) of a camera's image columns along its level row.
 
-    The image row whose ray at the principal point is horizontal (clamped to
-    the image) gives, per column, the depth along the optical axis; the
-    nearest of it and the rows next to it, converted to the distance along
-    each column's ray, is the free range.
+    The row whose ray at the principal point is horizontal (clamped to the
+    image, as for a pitched camera) is taken; each column's ray through it
+    is rotated into the navigation frame with the estimated camera rotation.
     """
-    h, w = depth.shape
     fx, fy, cx, cy = K[0, 0], K[1, 1], K[0, 2], K[1, 2]
-    r_z = R_world_optical[2]  # world z of the optical axes
+    height = int(round(2.0 * cy))
+    r_z = R_nav_optical[2]  # nav-frame z of the optical axes
     row = cy if abs(r_z[1]) < 1e-9 else cy - fy * r_z[2] / r_z[1]
-    row = int(np.clip(round(row), 1, h - 2))
-    z = depth[row - 1 : row + 2].min(axis=0)
-    u = np.arange(w)
-    rays_opt = np.stack(((u - cx) / fx, np.full(w, (row - cy) / fy), np.ones(w)))
-    rays = R_world_optical @ rays_opt  # world, z = 1 along the optical axis
-    ranges = z * np.hypot(rays[0], rays[1])
-    bearings = np.arctan2(rays[1], rays[0])
-    order = np.argsort(np.unwrap(bearings))
-    return np.unwrap(bearings)[order], ranges[order]
+    row = float(np.clip(round(row), 0, height - 1))
+    u = np.arange(width)
+    rays = R_nav_optical @ np.stack(((u - cx) / fx, np.full(width, (row - cy) / fy), np.ones(width)))
+    return np.sort(np.unwrap(np.arctan2(rays[1], rays[0])))
+
+
+def plan_ranges(grid: FlightMap, origin_xy: np.ndarray, bearings: np.ndarray, max_range: float) -> np.ndarray:
+    """Free range (m, ≤ ``max_range``) along each bearing from ``origin_xy`` to the first wall cell of the plan.
+
+    Rays are marched in steps of half a cell, the range being the midpoint
+    between the last free and the first wall sample (within about a cell of
+    the wall's face, as the plan is rasterised); leaving the grid ends a ray
+    at the grid's edge.
+    """
+    steps = np.arange(1, int(math.ceil(max_range / (0.5 * grid.cell))) + 1) * 0.5 * grid.cell
+    x = origin_xy[0] + np.cos(bearings)[:, None] * steps
+    y = origin_xy[1] + np.sin(bearings)[:, None] * steps
+    i = np.floor((x - grid.lo[0]) / grid.cell).astype(int)
+    j = np.floor((y - grid.lo[1]) / grid.cell).astype(int)
+    inside = (i >= 0) & (i < grid.shape[0]) & (j >= 0) & (j < grid.shape[1])
+    stop = ~inside
+    stop[inside] = grid.walls[i[inside], j[inside]]
+    first = np.where(stop.any(axis=1), stop.argmax(axis=1), len(steps))
+    return np.where(first < len(steps), steps[np.minimum(first, len(steps) - 1)] - 0.25 * grid.cell, max_range)
 
 
 def next_goal(
@@ -285,20 +301,50 @@ def next_goal(
     return k // grid.shape[1], k % grid.shape[1]
 
 
-def target_in_view(
-    depth: np.ndarray, K: np.ndarray, position: np.ndarray, R_world_optical: np.ndarray, points: np.ndarray, max_range: float
-) -> bool:
-    """True when one of ``points`` (m, world) projects into the image within ``max_range`` and is not hidden.
+@dataclass(frozen=True)
+class Blob:
+    """A detected colour blob: pixel count, centroid and lowest pixel ``(u, v)`` (px)."""
 
-    A point counts as unhidden when the depth image there is no nearer than
-    the point's own depth minus 0.3 m (the object's surface in front of it).
+    area: int
+    centroid: tuple[float, float]
+    bottom: tuple[float, float]
+
+
+def detect_colour(rgb: np.ndarray, colour: tuple[int, int, int], min_pixels: int = 40, hue_tolerance: int = 6) -> Blob | None:
+    """The largest blob of pixels of ``colour`` (0-255 RGB, a saturated one) in an ``(h, w, 3)`` uint8 frame, or ``None``.
+
+    A pixel matches when its OpenCV hue (0..180) is within ``hue_tolerance``
+    of the colour's, its saturation at least 0.85 of the colour's (shading
+    scales the channels and keeps the ratio; dull browns of the same hue —
+    door frames, debris — stay below even under a camera's white-balance
+    error) and its value above 60; blobs of fewer than ``min_pixels`` are
+    noise.
     """
-    h, w = depth.shape
-    p_opt = (np.asarray(points) - position) @ R_world_optical  # rows: points in the optical frame
-    for x, y, z in p_opt:
-        if z <= 0.05 or math.sqrt(x * x + y * y + z * z) > max_range:
-            continue
-        u, v = K[0, 0] * x / z + K[0, 2], K[1, 1] * y / z + K[1, 2]
-        if 0 <= u < w and 0 <= v < h and depth[int(v), int(u)] >= z - 0.3:
-            return True
-    return False
+    hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)
+    h0, s0, _ = (int(v) for v in cv2.cvtColor(np.uint8([[colour]]), cv2.COLOR_RGB2HSV)[0, 0])
+    hue_off = np.abs(((hsv[..., 0].astype(np.int16) - h0 + 90) % 180) - 90)
+    mask = ((hue_off <= hue_tolerance) & (hsv[..., 1] >= 0.85 * s0) & (hsv[..., 2] > 60)).astype(np.uint8)
+    count, labels, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    if count <= 1:
+        return None
+    k = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    area = int(stats[k, cv2.CC_STAT_AREA])
+    if area < min_pixels:
+        return None
+    v_bottom = int(stats[k, cv2.CC_STAT_TOP] + stats[k, cv2.CC_STAT_HEIGHT] - 1)
+    u_bottom = float(np.mean(np.flatnonzero(labels[v_bottom] == k)))
+    return Blob(area, (float(centroids[k, 0]), float(centroids[k, 1])), (u_bottom, float(v_bottom)))
+
+
+def floor_point(
+    K: np.ndarray, position: np.ndarray, R_nav_optical: np.ndarray, pixel: tuple[float, float], floor_z: float = 0.0
+) -> np.ndarray | None:
+    """Where the ray through ``pixel`` (px) of a camera at ``position`` (m) meets the floor ``z = floor_z`` (m, nav frame).
+
+    ``None`` when the ray does not point down to the floor.
+    """
+    ray = R_nav_optical @ np.array([(pixel[0] - K[0, 2]) / K[0, 0], (pixel[1] - K[1, 2]) / K[1, 1], 1.0])
+    if ray[2] >= -1e-6:
+        return None
+    t = (floor_z - position[2]) / ray[2]
+    return position + t * ray

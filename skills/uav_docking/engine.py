@@ -19,22 +19,24 @@ passes the simulated time.
 
 A ``track`` skill is a loop over::
 
-    engine = MotionEngine(carrier.arm_kinematics, rng=world.rng_for("carrier/motion_engine"))
+    engine = MotionEngine(carrier.arm_kinematics, rng=self.context.rng("carrier/motion_engine"))
     ...
-    scan = engine.scan_from_sensor(carrier.lidar.read().data.points_sensor())  # or None: keep the last
-    command = engine.update(world.now, carrier.joint_positions(), T_M_Q, carrier.speed(), uav_speed, scan)
+    scan = engine.scan_from_sensor(carrier.sensor("lidar").read().data.points_sensor())  # or None: keep the last
+    command = engine.update(self.now, carrier.joint_positions(), T_M_Q, carrier.speed(), uav_speed, scan)
     carrier.set_joint_targets(command.q)
 
-with ``T_M_Q`` from :class:`~.pose.UavPoseMeasurement` (``None`` when the
-marker is not seen: the engine finishes the running trajectory and holds).
+with ``carrier`` the carrier's onboard interface (joint encoders, wheel
+encoders, LiDAR) and ``T_M_Q`` the estimated UAV pose in M
+(:mod:`.relative_pose`; ``None`` before any measurement: the engine
+finishes the running trajectory and holds).
 The contact phase (eq. 15) shortens the standoff with
 ``engine.set_target(standoff=…)`` and, to bring Part A under Part B,
 ``engine.set_target(frame="part_a", aim_Q=p_B_Q)``.
 
 Measured (``benchmarks/motion_engine.py``, 2-core machine): planning
 cycle 13 ms CPU at the median, 20 ms at the 95th percentile, with 360
-valid vertices, ≈ 250 of them recycled; toppra ≈ 7 ms per selection. In
-pybullet with the real arm and a UAV flying a line 1.25 m above M
+valid vertices, ≈ 250 of them recycled; toppra ≈ 7 ms per selection. In the
+simulation with the real arm and a UAV flying a line 1.25 m above M
 (``tests/test_motion_engine.py``), the marker centre stays 0.8 cm from the
 optical axis on average (1.6 cm at most) at 0.15 m/s, 4.6 cm (7.6 cm) at
 0.3 m/s, after 1 s of start-up; the lead L_p and the joint PIDs' lag make

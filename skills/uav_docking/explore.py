@@ -31,13 +31,35 @@ the carrier, faster than the carrier; at the limit the UAV only catches up
 (phase ``catch_up``, a sweep is abandoned) until it is well inside again.
 Goals are only chosen inside the limit.
 
+What the skill senses (the sensing boundary): the UAV's position and
+heading are its onboard estimate (``odom``: IMU, optical flow, sonar — it
+drifts); the carrier's, the latest ``estimate`` telemetry the carrier sent
+over the team link (its map localisation), extrapolated to now with the
+velocity it reported; with no telemetry for ``link_timeout`` the UAV
+hovers. Both estimates start in the world frame, so their difference is the
+leash distance up to both estimation errors. The building's walls, door
+frames and zones are the plan the mission declares
+(``context.prior("building_plan")``); debris is not on it (it lies below
+the flight band).
+
 Coverage (blackboard ``coverage_key``, read by ``area_explored``): the share
 of the survey area's cells — zones tagged ``area_tags`` within the D_team
-disc of the carrier and reachable inside it — seen by the front camera
-(:func:`~.coverage.visible_cells`, its level depth row). The target is found
-when the scene object ``target`` shows in a front-camera frame within
-``target_range`` and not hidden (:func:`~.coverage.target_in_view`); then
-``target_found`` is written and, with ``stop_at_target``, the skill succeeds.
+disc of the carrier and reachable inside it — inside the front camera's
+view. The Bebop 2's front camera is a plain RGB camera: it measures no
+depth. A frame's view is therefore its horizontal field of view from the
+estimated camera pose (UAV estimate ∘ URDF mount, :func:`~.coverage.view_bearings`)
+cut at ``view_range`` and at the first wall of the plan
+(:func:`~.coverage.plan_ranges`, :func:`~.coverage.visible_cells`): what
+the camera would see of the declared building, not what it measured.
+
+Target search: the target is found when a blob of its declared colour
+(``target_rgb``, the casualty's high-visibility orange) shows in a
+front-camera frame (:func:`~.coverage.detect_colour`; walls hide it as they
+hide it from the renderer) and the floor point under its lowest pixel
+(:func:`~.coverage.floor_point`, a monocular range for an object lying on
+the floor) is within ``target_range``; then ``target_found`` is written, a
+``target_found`` phase event gives that estimated position, and, with
+``stop_at_target``, the skill succeeds.
 """
 
 from __future__ import annotations
@@ -48,21 +70,24 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.sensing import EstimateHistory, in_nav_frame, sensor_mount
 from marsupial.trees.skill import NodeParams, Skill
-from marsupial.world.robots.base import yaw_of
+from marsupial.world.errors import UnknownNameError
 
 from .coverage import (
     FlightMap,
+    detect_colour,
+    floor_point,
     geodesic,
     grid_path,
-    level_ranges,
     next_goal,
+    plan_ranges,
     shortcut,
-    target_in_view,
     truncate,
+    view_bearings,
     visible_cells,
 )
-from .team import carrier_port, phase_event
+from .team import phase_event
 
 D_E = 2.0  # m, D_e (§V-A): chosen — a stop per room-sized step; the front camera surveys ~4 m around each stop
 SOFT_ZONE = 1.0  # m inside the leash radius over which exploring blends into catching up with the carrier
@@ -93,7 +118,7 @@ class Explore(Skill):
         view_period: float = Field(0.5, gt=0.0)
         """Time between front-camera frames used for coverage and the target (s)."""
         area_tags: tuple[str, ...] = ("room", "hall", "corridor")
-        """Scene zone tags of the area to survey (every cell when the scene has no such zone)."""
+        """Tags of the building plan's zones to survey (every cell when the plan has no such zone)."""
         cell: float = Field(0.25, gt=0.0)
         """Side of the flight map's cells (m)."""
         clearance: float = Field(0.45, gt=0.0)
@@ -103,28 +128,41 @@ class Explore(Skill):
         coverage_key: str = "coverage"
         """Blackboard key of the surveyed fraction (0..1), read by ``area_explored``."""
         target: str | None = "target"
-        """Scene object searched for (none: no target search)."""
+        """Name of the searched object (in the events); none: no target search."""
+        target_rgb: tuple[int, int, int] = (255, 120, 20)
+        """Colour (0-255 RGB) of the searched object: the casualty's high-visibility orange."""
+        target_pixels: int = Field(40, ge=1)
+        """Fewest pixels of that colour that count as a detection (the 0.5 × 1.7 m casualty at 6 m spans a few hundred at 320 × 240)."""
         target_range: float = Field(6.0, gt=0.0)
-        """Farthest distance (m) at which the target is recognised in a front-camera frame."""
+        """Farthest distance (m, horizontal, from the floor point under the detection) at which the target counts as found."""
+        camera_link: str = "camera_front"
+        """URDF link carrying the front camera (its mount composes the camera pose with the UAV estimate)."""
+        link_timeout: float = Field(1.0, gt=0.0)
+        """Age (s) of the carrier's latest telemetry beyond which the UAV hovers and waits for it."""
         target_key: str = "target_found"
         """Blackboard key set to True when the target is found."""
         stop_at_target: bool = True
         """Succeed when the target is found (else keep exploring)."""
 
-    robot_kinds = ("Quadrotor",)
+    robot_kinds = ("Bebop2", "Tello")  # the quadrotors with a front camera
     writes = ("{coverage_key}", "{target_key}")
 
     # ------------------------------------------------------------ life cycle
     def start(self) -> None:
         p = self.params
-        self.carrier = carrier_port(self, p.carrier)
+        team = self.context.team()
+        if p.carrier not in team or p.carrier == self.robot_name:
+            raise UnknownNameError(f"carrier of {self.name} (a team member)", p.carrier, [n for n in team if n != self.robot_name])
         self.camera = self.robot.sensor("front_camera")
-        scene = self.world.scene
-        here = np.asarray(self.robot.pose()[0][:2])
+        self.camera_mount = sensor_mount(self.robot, p.camera_link, self.camera.offset, self.camera.R_link_optical)
+        estimate = self.robot.estimate()
+        self.history = EstimateHistory()
+        self.history.add(estimate)
+        here = np.asarray(estimate.position[:2])
         extent = (here - p.D_team, here + p.D_team)
-        self.map = FlightMap.from_scene(scene, p.height, 0.5, p.clearance, p.area_tags, p.cell, extent)
+        plan = self.context.prior("building_plan")
+        self.map = FlightMap.from_plan(plan, p.height, 0.5, p.clearance, p.area_tags, p.cell, extent)
         self.seen = np.zeros(self.map.shape, dtype=bool)
-        self.target_points = self.target_points_of(scene)
         self.found = False
         self.stops: list[np.ndarray] = []
         self.phase = "climb"
@@ -132,37 +170,37 @@ class Explore(Skill):
         self.flown = 0.0
         self.last_xy = here
         self.heading_turned = 0.0
-        self.last_yaw = yaw_of(self.robot.pose()[1])
-        self.next_view = self.world.now
+        self.last_yaw = estimate.yaw
+        self.next_view = self.now
         self.replan_at = math.inf
         self.catch_up_until = -math.inf
         self.catch_up_direction = np.zeros(2)
+        self.carrier_velocity = np.zeros(3)
         if not self.robot.motors_on and not self.robot.docked:
             self.robot.set_motors(True)
-
-    def target_points_of(self, scene) -> np.ndarray:
-        """Centre and top-face centre (m, world) of the target object; none without a target."""
-        if self.params.target is None:
-            return np.zeros((0, 3))
-        obj = scene.object(self.params.target)
-        centre = np.asarray(obj.position, dtype=float)
-        return np.array([centre, centre + [0.0, 0.0, 0.5 * obj.size[2]]])
 
     def step(self) -> Status:
         p = self.params
         if self.robot.docked:
             self.feedback_message = f"{self.robot_name} is docked: deploy it before exploring"
             return Status.FAILURE
-        position, orientation = self.robot.pose()
-        xy, yaw = np.asarray(position[:2]), yaw_of(orientation)
+        estimate = self.robot.estimate()
+        self.history.add(estimate)
+        position, yaw = estimate.position, estimate.yaw
+        xy = np.asarray(position[:2])
+        carrier = self.carrier_state()
+        if carrier is None:
+            self.robot.hover()
+            self.feedback_message = f"waiting for {self.params.carrier}'s telemetry"
+            return Status.RUNNING
         if self.phase == "fly":  # exploration flight only: drift while sweeping or catching up does not count
             self.flown += float(np.linalg.norm(xy - self.last_xy))
         self.heading_turned += abs(math.remainder(yaw - self.last_yaw, math.tau))
         self.last_xy, self.last_yaw = xy, yaw
-        carrier_xy = np.asarray(self.carrier.pose()[0][:2])
-        radius = self.leash_radius(position[2])
-        if self.world.now + 1e-9 >= self.next_view:
-            self.next_view = self.world.now + p.view_period
+        carrier_xy, self.carrier_velocity = carrier[0][:2], carrier[1]
+        radius = self.leash_radius(position[2], carrier[0][2])
+        if self.now + 1e-9 >= self.next_view:
+            self.next_view = self.now + p.view_period
             self.look()
             if self.found and p.stop_at_target:
                 self.feedback_message = "target found"
@@ -174,6 +212,15 @@ class Explore(Skill):
             yaw_rate = self.face(v_xy, yaw)
         self.robot.command_velocity(v_xy[0], v_xy[1], vz, yaw_rate, frame="world")
         return Status.RUNNING
+
+    def carrier_state(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """The carrier's position (m) and velocity (m/s) from its telemetry, extrapolated to now; ``None`` if too old."""
+        message = self.link.latest(self.params.carrier)
+        if message is None or self.now - message.sent > self.params.link_timeout:
+            return None
+        estimate = message.payload
+        velocity = np.asarray(estimate.velocity, dtype=float)
+        return np.asarray(estimate.position, dtype=float) + velocity * (self.now - estimate.stamp), velocity
 
     # ------------------------------------------------------------- phases
     def face(self, v_xy: np.ndarray, yaw: float) -> float:
@@ -195,7 +242,7 @@ class Explore(Skill):
                 self.phase = "plan"
             return np.zeros(2), vz, 0.0
         if self.phase == "plan":
-            if self.world.now + 1e-9 >= self.replan_at or math.isinf(self.replan_at):
+            if self.now + 1e-9 >= self.replan_at or math.isinf(self.replan_at):
                 self.plan(xy, carrier_xy, radius)
             if self.phase == "plan":
                 return np.zeros(2), vz, 0.0
@@ -220,13 +267,13 @@ class Explore(Skill):
         p = self.params
         # goals inside the leash disc now and where the carrier will be by the end of the next sweep
         horizon = p.D_e / p.speed + p.sweep_angle / p.sweep_rate
-        ahead = carrier_xy + np.asarray(self.carrier.velocity()[0][:2]) * horizon
+        ahead = carrier_xy + self.carrier_velocity[:2] * horizon
         allowed = self.map.disc(carrier_xy, radius - SOFT_ZONE) & self.map.disc(ahead, radius - SOFT_ZONE)
         if not allowed.any():
             allowed = self.map.disc(ahead, radius - SOFT_ZONE)
         passable = self.map.disc(carrier_xy, radius) | allowed | self.map.disc(xy, 1.0)
         start = self.map.nearest_free(xy, passable)
-        self.replan_at = self.world.now + 2.0
+        self.replan_at = self.now + 2.0
         if start is None:
             self.feedback_message = "no free cell near the UAV"
             return
@@ -272,11 +319,11 @@ class Explore(Skill):
         self.phase, self.flown, self.heading_turned = "sweep", 0.0, 0.0
 
     # -------------------------------------------------------- constraints
-    def leash_radius(self, z: float) -> float:
+    def leash_radius(self, z: float, carrier_z: float) -> float:
         """Horizontal distance (m) to the carrier the UAV is held within: D_team − margin, less the height difference."""
         p = self.params
         limit = p.D_team - p.leash_margin
-        dz = z - float(self.carrier.pose()[0][2])
+        dz = z - carrier_z
         return math.sqrt(max(limit**2 - dz**2, 0.0))
 
     def leash(self, v_xy: np.ndarray, xy: np.ndarray, carrier_xy: np.ndarray, radius: float) -> np.ndarray:
@@ -293,7 +340,7 @@ class Explore(Skill):
             self.phase, self.replan_at = "plan", math.inf
         if fade <= 0.0 and self.phase != "catch_up":
             return v_xy
-        v_carrier = float(np.linalg.norm(self.carrier.velocity()[0][:2]))
+        v_carrier = float(np.linalg.norm(self.carrier_velocity[:2]))
         v_catch = self.path_direction(xy, carrier_xy) * max(self.params.speed, v_carrier + 0.5)
         if fade >= 1.0 and self.phase != "catch_up":
             phase_event(self, "catch_up", distance=round(d, 3))
@@ -305,9 +352,9 @@ class Explore(Skill):
 
     def path_direction(self, xy: np.ndarray, carrier_xy: np.ndarray) -> np.ndarray:
         """Unit vector (world) along the free grid path from the UAV to the carrier (refreshed every 0.5 s)."""
-        if self.world.now < self.catch_up_until:
+        if self.now < self.catch_up_until:
             return self.catch_up_direction
-        self.catch_up_until = self.world.now + 0.5
+        self.catch_up_until = self.now + 0.5
         reach = float(np.linalg.norm(xy - carrier_xy)) + 2.0
         allowed = self.map.disc(carrier_xy, reach)
         start = self.map.nearest_free(carrier_xy, allowed)
@@ -338,17 +385,33 @@ class Explore(Skill):
         self.context.metric("coverage", coverage, robot=self.robot_name)
 
     def look(self) -> None:
-        """Survey with the front camera's latest frame: mark the cells in view, look for the target."""
+        """Survey with the front camera's latest frame: mark the cells in its view of the plan, look for the target.
+
+        The camera pose is the UAV's estimate at the frame's stamp (a late
+        frame was taken earlier; :class:`~marsupial.sensing.EstimateHistory`)
+        composed with the camera's mount.
+        """
         reading = self.camera.read()
         if reading is None:
             return
+        p = self.params
         frame = reading.data
-        bearings, ranges = level_ranges(frame.depth, frame.K, frame.rotation)
-        self.seen |= visible_cells(self.map, frame.position[:2], bearings, ranges, self.params.view_range)
-        if not self.found and len(self.target_points) and target_in_view(
-            frame.depth, frame.K, frame.position, frame.rotation, self.target_points, self.params.target_range
-        ):
-            self.found = True
-            self.write(self.params.target_key, True)
-            phase_event(self, "target_found", target=self.params.target, uav=[round(float(v), 2) for v in frame.position])
-            self.context.metric("target_found", 1.0, robot=self.robot_name)
+        position, R_nav_optical = in_nav_frame(self.history.at(reading.stamp), self.camera_mount)
+        bearings = view_bearings(frame.K, frame.rgb.shape[1], R_nav_optical)
+        ranges = plan_ranges(self.map, position[:2], bearings, p.view_range)
+        self.seen |= visible_cells(self.map, position[:2], bearings, ranges, p.view_range)
+        if self.found or p.target is None:
+            return
+        blob = detect_colour(frame.rgb, p.target_rgb, p.target_pixels)
+        if blob is None:
+            return
+        point = floor_point(frame.K, position, R_nav_optical, blob.bottom)
+        if point is None or float(np.linalg.norm(point[:2] - position[:2])) > p.target_range:
+            return
+        self.found = True
+        self.write(p.target_key, True)
+        phase_event(
+            self, "target_found", target=p.target, at=[round(float(v), 2) for v in point[:2]],
+            uav=[round(float(v), 2) for v in position], pixels=blob.area,
+        )
+        self.context.metric("target_found", 1.0, robot=self.robot_name)

@@ -8,8 +8,11 @@ position is extracted, and the tracking task starts" (§IV).
 The meeting point is fixed in the manipulator frame M: the UAV's Part B
 ``meeting_height`` above Part A of the ``docking_ready`` arm pose, the UAV
 heading ``yaw_M`` in M (default: the carrier's forward axis); the UAV flies there and holds it while
-the carrier drives on (:func:`~.relative_hold.hold_command`, from the
-robots' own state — the marker is not seen yet). The arm goes to
+the carrier drives on (:func:`~.relative_hold.command_hold`). Until the
+marker is seen, the UAV's place in M comes from the two robots' own
+estimates only (the UAV's over the team link, the carrier's onboard:
+:mod:`.relative_pose`); each frame in which the bundle is measured then
+re-anchors it, so the last metres are flown on the camera. The arm goes to
 ``docking_ready`` and, until the bundle is detected, sweeps the camera's
 axis over an upward cone (:func:`search_offsets`: base yaw and wrist pitch
 in a Lissajous pattern); once detected the arm holds still. The skill
@@ -33,7 +36,7 @@ from pydantic import Field
 from marsupial.trees.skill import NodeParams, Skill
 
 from .observer import EyeInHandObserver, position_spread
-from .relative_hold import CarrierFrame, HoldGains, hold_command, target_above_part_a, uav_in_M
+from .relative_hold import CarrierFrame, HoldGains, command_hold, relative_pose_of, target_above_part_a
 from .team import DOCKING_FLAG, UAV_POSE, carrier_port, phase_event
 
 SEARCH_JOINTS = (0, 4)  # arm joints swept by the search: base yaw (joint 1) and wrist pitch (joint 5)
@@ -90,7 +93,8 @@ class Rendezvous(Skill):
         self.q_ready = self.carrier.arm_pose(p.arm_pose)
         self.p_meet_M = target_above_part_a(self.carrier, self.robot, p.meeting_height, p.arm_pose, p.yaw_M)
         self.gains = HoldGains(max_speed=p.approach_speed)
-        self.observer = EyeInHandObserver.of(self.carrier)
+        self.observer = EyeInHandObserver.of(self.context, self.carrier)
+        self.relative = relative_pose_of(self, self.carrier)
         self.search_started: float | None = None
         self.q_hold: np.ndarray | None = None  # arm pose held once the marker is seen
         self.seen: list[np.ndarray] = []  # UAV positions in M of the consecutive detections
@@ -103,20 +107,20 @@ class Rendezvous(Skill):
         if self.robot.docked:
             self.feedback_message = f"{self.robot_name} is docked: nothing to meet"
             return Status.FAILURE
-        frame = CarrierFrame.of(self.carrier)
-        p_uav_M, yaw_uav_M = uav_in_M(self.robot, frame)
-        v_W, yaw_rate = hold_command(p_uav_M, yaw_uav_M, self.p_meet_M, self.params.yaw_M, frame, self.gains)
-        self.robot.command_velocity(*v_W, yaw_rate, frame="world")
-        distance = float(np.linalg.norm(self.p_meet_M - p_uav_M))
+        state = self.relative.update(self.now)
+        distance = command_hold(self.robot, state, self.p_meet_M, self.params.yaw_M, CarrierFrame.of(self.carrier), self.gains)
+        if distance is None:
+            self.feedback_message = "waiting for the UAV's estimate over the team link"
+            return Status.RUNNING
         arm_ready = float(np.max(np.abs(self.carrier.joint_positions() - self.q_ready))) <= self.params.tolerance
         if self.search_started is None:
             self.carrier.set_joint_targets(self.q_ready)
             self.feedback_message = f"to the meeting point: {distance:.2f} m"
             if arm_ready:
-                self.search_started = self.world.now
+                self.search_started = self.now
                 phase_event(self, "search", uav_distance=distance)
             return Status.RUNNING
-        observation = self.observer.observe()
+        observation = self.observer.observe(self.now)
         if observation is not None and observation.stamp != self.last_stamp:
             self.last_stamp = observation.stamp
             if observation.seen:
@@ -129,7 +133,7 @@ class Rendezvous(Skill):
         self.command_arm()
         recent = self.seen[-self.params.stable_detections :]
         stable = len(recent) >= self.params.stable_detections and position_spread(recent) <= self.params.stable_spread
-        heading_error = abs(math.remainder(yaw_uav_M - self.params.yaw_M, math.tau))
+        heading_error = abs(math.remainder(state.yaw_M - self.params.yaw_M, math.tau))
         arrived = distance <= self.params.arrival_tolerance and heading_error <= 0.15
         if stable and arrived:
             self.feedback_message = f"marker detected stably in {len(recent)} frames"
@@ -152,7 +156,7 @@ class Rendezvous(Skill):
         self.q_hold = None
         q = self.q_ready.copy()
         p = self.params
-        t = self.world.now - self.search_started
+        t = self.now - self.search_started
         q[list(SEARCH_JOINTS)] += search_offsets(t, p.search_yaw, p.search_tilt, p.search_period)
         self.carrier.set_joint_targets(q)
 

@@ -11,9 +11,14 @@ docking device charges the UAV meanwhile (12.6 V / 3.5 A charger, §V-A).
 start, and "the docking device quickly releases the Part B in the adequate
 moment when the UAV motors have enough thrust to hold the flight" (§IV-C):
 the levers open only once the rotor thrust has reached the UAV's weight.
-The UAV then climbs straight up relative to the carrier (it moves with the
-carrier as it climbs, so Part A never sweeps into it) to a safe height
-above Part A, and the arm folds back for driving.
+At the release the carrier hands the UAV's estimator its pose, as a real
+carrier sends it over its link: the carrier's own estimate ∘ the forward
+kinematics of Part A (encoders) ∘ the UAV's pose on Part A
+(``uav.reset_estimate``). The UAV then climbs straight up relative to the
+carrier (it moves with the carrier as it climbs, so Part A never sweeps into
+it) to a safe height above Part A, on the two robots' estimates re-anchored
+by the eye-in-hand camera (the bundle's contact tag is in view from the
+release on), and the arm folds back for driving.
 
 Both keep their arm targets fresh every tick (one command per tick), so a
 node that takes the arm over in the same tick as they stop keeps it.
@@ -26,18 +31,23 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.trees.skill import NodeParams, Skill
-from marsupial.world.world import GRAVITY
 
-from .relative_hold import CarrierFrame, HoldGains, hold_command, uav_in_M
+from .pose import invert
+from .relative_hold import PART_A_LINK, CarrierFrame, HoldGains, command_hold, part_b_transform, relative_pose_of
+from .relative_pose import RelativeState
+from .selection import yaw_of_rotation
 from .team import DOCKING_FLAG, UAV_STORED, carrier_port, phase_event
 
 ARM_TOLERANCE = 0.02  # rad: every joint this close to its target counts as arrived
+GRAVITY = 9.81  # m/s², standard gravity (the weight the rotor thrust must hold before the release)
 
 
 class Store(Skill):
     """Carry the UAV locked on Part A to the storage pose (ground sensors clear); it charges while stored."""
 
     class Params(NodeParams):
+        uav: str = "uav"
+        """The UAV being stored (named in the ``stored`` event)."""
         arm_pose: str = "storage"
         """Arm pose that stores the UAV (a name of the carrier's arm poses): over the rear deck, sensors clear (§IV-B)."""
         tolerance: float = Field(ARM_TOLERANCE, gt=0.0)
@@ -50,19 +60,19 @@ class Store(Skill):
         self.q_storage = self.robot.arm_pose(self.params.arm_pose)
 
     def step(self) -> Status:
-        uav = self.robot.docking.docked
-        if uav is None:
+        device, uav = self.robot.docking, self.params.uav
+        if not device.locked:
             self.feedback_message = f"no UAV is locked on {self.robot_name}'s Part A"
             return Status.FAILURE
         self.robot.set_joint_targets(self.q_storage)
         error = float(np.max(np.abs(self.robot.joint_positions() - self.q_storage)))
-        self.feedback_message = f"carrying {uav.name} to '{self.params.arm_pose}': {error:.3f} rad to go"
+        self.feedback_message = f"carrying {uav} to '{self.params.arm_pose}': {error:.3f} rad to go"
         if error > self.params.tolerance:
             return Status.RUNNING
         self.write(f"{self.robot_name}/{UAV_STORED}", True)
         self.write(f"{self.robot_name}/{DOCKING_FLAG}", False)
-        phase_event(self, "stored", uav=uav.name, charging=bool(uav.charging))
-        self.feedback_message = f"{uav.name} stored, charging: {bool(uav.charging)}"
+        phase_event(self, "stored", uav=uav, charging=device.charging)
+        self.feedback_message = f"{uav} stored, charging: {device.charging}"
         return Status.SUCCESS
 
     def finish(self, status: Status) -> None:
@@ -98,13 +108,16 @@ class Deploy(Skill):
         self.phase = "raise"
         self.spin_up_deadline = 0.0
         self.p_clear_M = np.zeros(3)
+        self.yaw_clear_M = 0.0
         self.gains = HoldGains(max_speed=self.params.climb_speed)
+        self.T_A_Q = invert(part_b_transform(self.robot))  # the UAV on Part A: Part B's face on Part A's (§IV-C)
+        self.relative = None
         self.write(f"{self.params.carrier}/{DOCKING_FLAG}", True)
         phase_event(self, "raise")
 
     def step(self) -> Status:
-        uav = self.robot.robot
-        if self.phase != "climb" and self.carrier.docking.docked is not uav:
+        uav = self.robot
+        if self.phase != "climb" and not (self.carrier.docking.locked and uav.docked):
             self.feedback_message = f"{self.robot_name} is not locked on {self.params.carrier}'s Part A"
             return Status.FAILURE
         if self.phase == "raise":
@@ -113,7 +126,7 @@ class Deploy(Skill):
             self.feedback_message = f"raising the arm: {error:.3f} rad to go"
             if error <= self.params.tolerance:
                 self.robot.set_motors(True)
-                self.phase, self.spin_up_deadline = "spin_up", self.world.now + self.params.spin_up_timeout
+                self.phase, self.spin_up_deadline = "spin_up", self.now + self.params.spin_up_timeout
                 phase_event(self, "spin_up")
             return Status.RUNNING
         if self.phase == "spin_up":
@@ -121,27 +134,43 @@ class Deploy(Skill):
             weight = uav.mass * GRAVITY
             self.feedback_message = f"motors spinning up: thrust {uav.thrust:.2f} N of {weight:.2f} N"
             if uav.thrust >= weight:
-                frame = CarrierFrame.of(self.carrier)
-                p_release_M, _ = uav_in_M(self.robot, frame)
-                self.p_clear_M = p_release_M + np.array([0.0, 0.0, self.params.clearance])
+                T_M_Q = self.T_M_Q_release = self.hand_over()
+                self.p_clear_M = T_M_Q[:3, 3] + np.array([0.0, 0.0, self.params.clearance])
+                self.yaw_clear_M = yaw_of_rotation(T_M_Q[:3, :3])
+                self.relative = relative_pose_of(self, self.carrier, since=self.now)  # the estimates after the hand-over
                 self.carrier.docking.release()
                 self.write(f"{self.params.carrier}/{UAV_STORED}", False)
                 self.phase = "climb"
                 phase_event(self, "released", thrust=uav.thrust, weight=weight)
                 return self.climb()
-            if self.world.now >= self.spin_up_deadline:
+            if self.now >= self.spin_up_deadline:
                 self.feedback_message = f"thrust {uav.thrust:.2f} N never reached the weight {weight:.2f} N"
                 return Status.FAILURE
             return Status.RUNNING
         return self.climb()
 
-    def climb(self) -> Status:
-        """Climb to the clearance height above the release point, moving with the carrier."""
+    def hand_over(self) -> np.ndarray:
+        """Reset the UAV's estimator to its pose at release, as the carrier knows it; returns that pose in M (4×4).
+
+        P_Q^M = F(q) of Part A (encoders) ∘ the UAV on Part A; in the
+        carrier's navigation frame through the carrier's own estimate.
+        """
+        T_M_Q = self.carrier.arm_kinematics.transform(self.carrier.joint_positions(), PART_A_LINK) @ self.T_A_Q
         frame = CarrierFrame.of(self.carrier)
-        p_uav_M, yaw_uav_M = uav_in_M(self.robot, frame)
-        v_W, yaw_rate = hold_command(p_uav_M, yaw_uav_M, self.p_clear_M, yaw_uav_M, frame, self.gains)
-        self.robot.command_velocity(*v_W, yaw_rate, frame="world")
-        error = float(np.linalg.norm(self.p_clear_M - p_uav_M))
+        p_N = frame.to_world(T_M_Q[:3, 3])
+        yaw_N = frame.yaw + yaw_of_rotation(T_M_Q[:3, :3])
+        self.robot.reset_estimate(p_N, yaw_N)
+        return T_M_Q
+
+    def climb(self) -> Status:
+        """Climb to the clearance height above the release point, moving with the carrier (on the estimates)."""
+        state = self.relative.update(self.now)
+        if state.T_M_Q is None:  # no telemetry since the hand-over yet: the UAV is where it was released
+            state = RelativeState(self.now, self.T_M_Q_release)
+        error = command_hold(self.robot, state, self.p_clear_M, self.yaw_clear_M, CarrierFrame.of(self.carrier), self.gains)
+        if error is None:
+            self.feedback_message = "waiting for the UAV's estimate over the team link"
+            return Status.RUNNING
         self.feedback_message = f"climbing clear of the arm: {error:.2f} m to go"
         if error > 0.05:
             return Status.RUNNING

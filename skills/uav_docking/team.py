@@ -3,7 +3,8 @@
 A UAV skill (``explore``, ``rendezvous``, ``relative_hold``, ``deploy``)
 runs on the UAV (``robot:``) and names its carrier, a team member of class
 ``MobileManipulator``, by the parameter ``carrier``. It reaches the carrier
-through :func:`carrier_port`, so that its commands to the carrier (arm
+through :func:`carrier_port`: the carrier's onboard interface (encoders,
+camera, docking device states, its state estimate), whose commands (arm
 targets) are stamped by the run's arbiter like its commands to the UAV.
 
 Blackboard keys written by the family, under the carrier's name
@@ -25,6 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 from marsupial.trees.arbitration import CommandPort
 from marsupial.world.errors import UnknownNameError
+from marsupial.world.onboard import CarrierOnboard
 
 if TYPE_CHECKING:
     from marsupial.trees.skill import Skill
@@ -35,17 +37,18 @@ UAV_STORED = "uav_stored"
 
 
 def carrier_port(skill: Skill, name: str) -> CommandPort:
-    """The team member ``name`` as ``skill`` commands it (through the run's arbiter); it must be a carrier.
+    """The onboard interface of team member ``name`` as ``skill`` commands it (through the run's arbiter).
 
-    A carrier is a robot with an arm, its kinematics and a docking device
-    (the ``mobile_manipulator``). Raises :class:`UnknownNameError` naming the
+    It must be a carrier: an arm with its kinematics and a docking device
+    (:class:`~marsupial.world.onboard.CarrierOnboard`, the
+    ``mobile_manipulator``). Raises :class:`UnknownNameError` naming the
     team's carriers when ``name`` is not one of them.
     """
-    robots = skill.world.robots
-    carriers = [n for n, r in robots.items() if hasattr(r, "docking") and hasattr(r, "arm_kinematics")]
+    context = skill.context
+    carriers = [n for n in context.team() if isinstance(context.onboard(n), CarrierOnboard)]
     if name not in carriers:
         raise UnknownNameError(f"carrier of {skill.name} (a mobile_manipulator)", name, carriers)
-    return CommandPort(robots[name], skill.context.arbiter, skill.id, skill.name)
+    return skill.member(name)
 
 
 def phase_event(skill: Skill, phase: str, **fields: Any) -> None:

@@ -23,6 +23,16 @@ complementary filter (plain ``math``; it runs at the autopilot rate,
   (a platform, an arm, a carrier under the vehicle) is ignored; without a
   recent floor echo the barometer (whose drifting offset is re-calibrated
   against the sonar while both are valid) corrects it.
+- external vision fixes (:mod:`.external`): when another robot sends the
+  UAV's pose over the team link (the carrier's eye-in-hand camera), each fix
+  is compared with the estimate at its stamp (a short history) and corrects
+  position, velocity and heading now; while fixes are recent, flow samples
+  that disagree with the vision-anchored velocity by more than a gate (the
+  flow over a moving deck) are rejected, the sonar gate is tightened (no
+  deck echo taken for the floor) and the barometer is calibrated against
+  the anchored height. The position and heading
+  corrections are cumulated in :attr:`FlightEstimator.shift`, which the
+  autopilot follows with its references (the frame moved, not the vehicle).
 - at rest (motors off, or held by a docking device) the estimate is held:
   zero velocity, position kept (zero-velocity update); the attitude keeps
   following the IMU.
@@ -35,13 +45,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..sensors.imu import quat_multiply, quat_yaw, rotation_rows
 from ..world import GRAVITY
 from .base import Estimator, StateEstimate
+from .external import VisionFixFusion, VisionFixGains
 
 if TYPE_CHECKING:
     from ..sensors.barometer import Barometer
@@ -93,11 +105,16 @@ class FlightEstimator(Estimator):
             never goes below ``floor_height + landed_height``.
         sonar_offset_z: z (m) of the sonar's origin in the base frame (negative: below the base).
         position, yaw: start pose (m, rad) in the navigation frame.
+        vision_fixes: returns the newest :class:`~.external.VisionFix` message the team link delivered to
+            this UAV (or ``None``); ``None``: no external fixes.
+        fix_gains: gains of their fusion (:class:`~.external.VisionFixGains`).
 
     Attributes (read by the autopilot every update, plain floats):
         p, v: position (m) and velocity (m/s) in the navigation frame.
         yaw: heading (rad); R: row-major ``R_nav_body``; resets: number of :meth:`reset` calls.
         height_valid: True while a recent range echo exists (flow updates only then).
+        shift: cumulated position (m) and heading (rad) corrections of the vision fixes, ``[x, y, z, yaw]``.
+        fixes: the vision-fix fusion (``None`` without a source); flow_rejected: flow samples gated out.
     """
 
     frame = "odom"
@@ -116,6 +133,8 @@ class FlightEstimator(Estimator):
         position: tuple[float, float, float],
         yaw: float,
         gains: FlightEstimatorGains = FlightEstimatorGains(),
+        vision_fixes: Callable[[], Any] | None = None,
+        fix_gains: VisionFixGains = VisionFixGains(),
     ):
         self.clock = world.clock
         self.imu, self.flow, self.sonar, self.barometer = imu, flow, sonar, barometer
@@ -128,6 +147,9 @@ class FlightEstimator(Estimator):
         self.v = [0.0, 0.0, 0.0]
         self.bias = [0.0, 0.0]  # m/s², horizontal accelerometer bias estimate (navigation frame)
         self.resets = 0
+        self.fixes = None if vision_fixes is None else VisionFixFusion(vision_fixes, fix_gains)
+        self.shift = self.fixes.shift if self.fixes is not None else [0.0, 0.0, 0.0, 0.0]
+        self.flow_rejected = 0
         self.height_valid = False
         self._t_echo = -math.inf
         self._t_floor_echo = -math.inf
@@ -149,6 +171,8 @@ class FlightEstimator(Estimator):
         self._q_off = (0.0, 0.0, math.sin(offset / 2.0), math.cos(offset / 2.0))
         self._set_attitude(self._q_imu)
         self._baro_offset = None
+        if self.fixes is not None:
+            self.fixes.clear()
         self.resets += 1
         self._stamp = self.clock.now
         self._cache = None
@@ -201,6 +225,8 @@ class FlightEstimator(Estimator):
         if p[2] < self.lowest:  # it cannot be under the floor (the velocity is left to the accelerometer,
             p[2] = self.lowest  # which feels the touchdown)
         self._correct_flow()
+        if self.fixes is not None:
+            self._correct_vision()
 
     # --------------------------------------------------------------- helpers
     def _set_attitude(self, q_imu: tuple[float, float, float, float]) -> None:
@@ -235,6 +261,8 @@ class FlightEstimator(Estimator):
     def _correct_height(self, r22: float) -> None:
         """Sonar echoes gated on the expected floor; the barometer when no floor echo is recent."""
         g, now, p, v = self.gains, self.clock.now, self.p, self.v
+        anchored = self.fixes is not None and self.fixes.recent(now)  # vision fixes hold the height
+        gate = min(g.sonar_gate, self.fixes.gains.sonar_gate) if anchored else g.sonar_gate  # type: ignore[union-attr]
         echo = self._new("sonar", self.sonar)
         if echo is not None:
             rng = echo.range  # type: ignore[attr-defined]
@@ -245,7 +273,7 @@ class FlightEstimator(Estimator):
                 rate = (height - h_prev) / (now - t_prev) if now - t_prev < 0.5 else v[2]
                 self._t_echo, self._last_echo = now, (now, height)
                 e = self.floor_height + height - p[2]
-                if abs(e) < g.sonar_gate and abs(rate - v[2]) < g.sonar_rate_gate:  # an echo off the floor
+                if abs(e) < gate and abs(rate - v[2]) < g.sonar_rate_gate:  # an echo off the floor
                     k = self.sonar.period * min(1.0, g.sonar_soft / abs(e)) if e else 0.0
                     p[2] += 2.0 * g.sonar_omega * k * e
                     v[2] += g.sonar_omega**2 * k * e
@@ -254,8 +282,8 @@ class FlightEstimator(Estimator):
         baro = self._new("baro", self.barometer)
         if baro is None:
             return
-        if self._baro_offset is None or now - self._t_floor_echo <= g.height_timeout:
-            self._calibrate_baro(p[2], float(baro))  # type: ignore[arg-type]  # sonar holds the height
+        if self._baro_offset is None or anchored or now - self._t_floor_echo <= g.height_timeout:
+            self._calibrate_baro(p[2], float(baro))  # type: ignore[arg-type]  # sonar or vision holds the height
         else:
             z_baro = float(baro) + self._baro_offset  # type: ignore[arg-type]
             period = self.barometer.period
@@ -270,9 +298,29 @@ class FlightEstimator(Estimator):
         c, s = math.cos(self.yaw), math.sin(self.yaw)
         fx, fy = flow.vx, flow.vy  # type: ignore[attr-defined]
         ex, ey = c * fx - s * fy - self.v[0], s * fx + c * fy - self.v[1]
+        if self.fixes is not None and self.fixes.flow_rejected(self.clock.now, ex, ey):
+            self.flow_rejected += 1  # over the carrier's moving deck: off the vision-anchored velocity
+            return
         period = self.flow.period
         kv, kb = self.gains.flow_velocity * period, self.gains.flow_bias * period
         self.v[0] += kv * ex
         self.v[1] += kv * ey
         self.bias[0] -= kb * ex
         self.bias[1] -= kb * ey
+
+    def _correct_vision(self) -> None:
+        """Fuse a new vision fix (delayed: against the estimate at its stamp), then record the estimate."""
+        fixes, p, v = self.fixes, self.p, self.v
+        correction = fixes.poll()  # type: ignore[union-attr]
+        if correction is not None:
+            dpx, dpy, dpz, dvx, dvy, dvz, dyaw = correction
+            p[0] += dpx
+            p[1] += dpy
+            p[2] += dpz
+            v[0] += dvx
+            v[1] += dvy
+            v[2] += dvz
+            half = 0.5 * dyaw  # the heading offset turns about the navigation frame's z
+            self._q_off = quat_multiply((0.0, 0.0, math.sin(half), math.cos(half)), self._q_off)
+            self._set_attitude(self._q_imu)
+        fixes.record(self.clock.now, p, self.yaw)  # type: ignore[union-attr]

@@ -19,6 +19,10 @@ loop is fast and runs on the gyro; drag acts on the true air velocity).
    reference reaches the command critically damped and is integrated into a
    reference position (the carrot); the heading reference integrates the yaw
    rate. With a zero command the carrot stops and the vehicle holds it.
+   When the estimator shifts its navigation frame under the vehicle (the
+   corrections of external vision fixes, ``nav.shift``), the carrot and the
+   heading reference move by as much: a correction of the estimate is not
+   a command to move (PX4 shifts its set-points by the estimator's resets).
 3. Position controller: PD on carrot minus *estimated* position / velocity
    + small integral + acceleration and drag feed-forward gives a desired
    acceleration in the navigation frame, whose direction sets the desired
@@ -110,6 +114,7 @@ class NavState(Protocol):
     yaw: float
     R: tuple[float, ...]  # row-major R_nav_body
     resets: int
+    shift: list[float]  # cumulated frame corrections [x, y, z (m), yaw (rad)]
 
 
 class Autopilot:
@@ -136,6 +141,7 @@ class Autopilot:
         self._resets_seen = -1
         self.p_ref = [0.0, 0.0, 0.0]
         self.yaw_ref = 0.0
+        self._shift_seen = [0.0, 0.0, 0.0, 0.0]
 
     # ------------------------------------------------------------ commands
     def command(self, vx: float, vy: float, vz: float, yaw_rate: float = 0.0, frame: str = "body") -> None:
@@ -167,6 +173,7 @@ class Autopilot:
         self.yaw_ref = nav.yaw
         self.integral = [0.0, 0.0, 0.0]
         self._resets_seen = nav.resets
+        self._shift_seen = list(nav.shift)
 
     # ------------------------------------------------------------ update
     def update(
@@ -185,6 +192,14 @@ class Autopilot:
         """
         if nav.resets != self._resets_seen:  # the estimate restarted (hand-over): hold the new estimate
             self.reset(nav)
+        shift, seen = nav.shift, self._shift_seen
+        if shift != seen:  # the navigation frame moved under the vehicle: so do the references
+            pr = self.p_ref
+            pr[0] += shift[0] - seen[0]
+            pr[1] += shift[1] - seen[1]
+            pr[2] += shift[2] - seen[2]
+            self.yaw_ref += shift[3] - seen[3]
+            seen[:] = shift
         (kp_xy, kd_xy, ki_xy, kp_z, kd_z, ki_z, leash, imax, kp_att, kd_att, acc_ref, acc_ref_z,
          tan_tilt, max_thrust, c1, c2, m, tau, tau_z, ixx, iyy, izz) = self._ctl
         x, y, z, w = q

@@ -15,7 +15,10 @@ Flight model (pybullet forces, every physics step, plain ``math``):
    (:mod:`..sensors.flow`) and the onboard
    :class:`~marsupial.world.estimation.flight.FlightEstimator` fusing them at
    the autopilot rate (120 Hz). The estimate starts at the spawn pose and
-   drifts; ``estimator.reset`` restarts it (a carrier's hand-over).
+   drifts; ``estimator.reset`` restarts it (a carrier's hand-over). External
+   vision fixes of the vehicle's pose that a team member sends on
+   ``<name>/vision_fix`` (:mod:`~marsupial.world.estimation.external`) are
+   fused as the radio delivers them.
 2. Autopilot (:mod:`.autopilot`): velocity commands (``"body"``: heading
    frame at the estimated heading; ``"world"``: the estimate's navigation
    frame ``odom``), clipped to the kind's :class:`FlightLimits` (Bebop 2:
@@ -47,6 +50,7 @@ velocities m/s, angles rad.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
@@ -57,6 +61,7 @@ import pybullet
 
 from ..energy import Battery, BatteryGauge, BatterySpec, RotorPowerModel, hover_endurance_s
 from ..errors import UnknownNameError
+from ..estimation.external import vision_fix_topic
 from ..estimation.flight import FlightEstimator
 from ..onboard import QuadrotorOnboard, simulates_hardware
 from ..sensors.barometer import Barometer
@@ -329,6 +334,7 @@ class Quadrotor(Robot):
             sonar_offset_z=spec.sonar.offset[2],
             position=tuple(float(c) for c in position),  # type: ignore[arg-type]
             yaw=yaw_of(orientation),
+            vision_fixes=functools.partial(world.team_link.latest_on, vision_fix_topic(name)),
         )
         self.autopilot.reset(self.estimator)
         if motors_on is None:

@@ -22,9 +22,10 @@ channel, 1σ ``white_balance_std``), a per-frame exposure gain (1σ
 ``exposure_std``), additive pixel noise (1σ ``config.noise_std`` in 0-255
 intensity), and depth noise growing with depth (``depth_noise_per_m``);
 frame drops and latency come from :class:`SensorConfig`. The gains are one
-saturating OpenCV ``transform`` and the pixel noise one saturating ``add``
-of a slice of a pre-drawn noise bank at a seeded random offset (a fresh
-full-frame draw would cost ten times more), both in place.
+saturating per-channel OpenCV ``multiply``, the pixel noise a saturating
+``add`` and ``subtract`` of the positive and negative parts of a slice of a
+pre-drawn noise bank at a seeded random offset (a fresh full-frame draw
+would cost ten times more), all in place.
 """
 
 from __future__ import annotations
@@ -146,7 +147,7 @@ class Camera(Sensor[CameraFrame]):
         k = self.noise_scale
         self.exposure_std = exposure_std * k
         self.white_balance = tuple(1.0 + white_balance_std * k * float(g) for g in self.rng.standard_normal(3))
-        self._pixel_bank: np.ndarray | None = None  # drawn on the first noisy frame
+        self._pixel_bank: tuple[np.ndarray, np.ndarray] | None = None  # drawn on the first noisy frame
         self._depth_bank: np.ndarray | None = None
         self.intrinsics = intrinsics
         self.link = robot.link_index(link) if isinstance(link, str) else link
@@ -265,14 +266,20 @@ class Camera(Sensor[CameraFrame]):
         gain = 1.0 + self.exposure_std * float(self.rng.standard_normal()) if self.exposure_std > 0 else 1.0
         gains = [g * gain for g in self.white_balance]
         if gains != [1.0, 1.0, 1.0]:
-            cv2.transform(rgb, np.diag(gains).astype(np.float32), dst=rgb)
+            cv2.multiply(rgb, (*gains, 0.0), dst=rgb, dtype=cv2.CV_8U)  # one gain per channel
         if self.config.noise_std > 0:
             if self._pixel_bank is None:
                 bank = self.rng.standard_normal(rgb.size + NOISE_BANK_SLACK, dtype=np.float32)
                 bank *= self.config.noise_std
-                self._pixel_bank = np.clip(np.rint(bank), -255, 255).astype(np.int16)
+                np.rint(bank, out=bank)
+                np.clip(bank, -255, 255, out=bank)
+                # the noise as its positive and negative parts: two saturating uint8 operations, the
+                # cheapest exact saturating addition of a signed noise
+                self._pixel_bank = (np.maximum(bank, 0).astype(np.uint8), np.maximum(-bank, 0).astype(np.uint8))
             start = int(self.rng.integers(NOISE_BANK_SLACK))
-            cv2.add(rgb, self._pixel_bank[start : start + rgb.size].reshape(rgb.shape), dst=rgb, dtype=cv2.CV_8U)
+            up, down = (b[start : start + rgb.size].reshape(rgb.shape) for b in self._pixel_bank)
+            cv2.add(rgb, up, dst=rgb)
+            cv2.subtract(rgb, down, dst=rgb)
         if self.depth_noise_per_m > 0:
             if self._depth_bank is None:
                 self._depth_bank = self.rng.standard_normal(depth.size + NOISE_BANK_SLACK, dtype=np.float32)

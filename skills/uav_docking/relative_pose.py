@@ -1,0 +1,285 @@
+"""The UAV pose in the manipulator frame M between camera frames: the two robots' own estimates, re-anchored by each frame.
+
+The eye-in-hand camera measures P_Q^M (eq. 1) at its frame rate, late by
+its latency, and not at all when the bundle is out of view. Between frames
+the pose is propagated with what the two robots know of their own motion:
+
+- the carrier's onboard estimate (wheel odometry or map localisation) of its
+  base in its navigation frame N, composed with M's mount in the URDF:
+  ``T_N_M(t)``;
+- the UAV's onboard estimate (IMU, optical flow, sonar, barometer) of its
+  base in its odometry frame O, as the carrier receives it over the team
+  link (20 Hz telemetry, late and sometimes lost): ``T_O_Q(t)``, extrapolated
+  from the newest message with its velocity and yaw rate.
+
+N and O coincide at the start of a run and part by the estimators' drift,
+so the pose in M is ``T_M_Q(t) = T_N_M(t)⁻¹ · C · T_O_Q(t)`` with ``C`` the
+drift between the two frames (a turn about z and a translation), which each
+camera frame re-anchors (:class:`RelativePoseFilter`): the prediction at
+the frame's stamp is compared with the measurement and ``C`` moves toward
+it by a gain; a measurement too far from the prediction is an outlier. Only
+the drift since the last frame adds to the error while the marker is hidden.
+
+External vision fix: each frame accepted by the filter is also sent to the
+UAV over the team link (:class:`~marsupial.world.onboard.VisionFix` on
+``<uav>/vision_fix``): the UAV base's pose in N, ``T_N_M(t_k) · P_Q^M(t_k)``,
+the camera's measurement composed with the carrier's own estimate at the
+frame's stamp ``t_k`` (not the fused pose: the UAV's own estimate is no part
+of it). The UAV's flight estimator fuses it as a delayed measurement
+(:mod:`marsupial.world.estimation.external`), which pulls O onto N: ``C``
+then tends to the identity and the UAV's velocity estimate, the one its
+autopilot flies on, is the velocity in N, the frame of the carrier's
+velocity that the relative hold feeds forward. Frames: N is the carrier's
+navigation frame; O the UAV's, equal to N at the start of a run and after
+a deploy hand-over (``reset_estimate``), anchored to N while fixes arrive.
+
+Frames and units: 4×4 homogeneous transforms ``T_A_B`` (B in A), metres,
+radians, seconds (simulated).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from marsupial.geometry import rot_z, rotation_matrix, transform
+from marsupial.world.onboard import StateEstimate, VisionFix, vision_fix_topic
+
+from .selection import yaw_of_rotation
+
+ESTIMATE_WINDOW = 1.0  # s of estimates kept to propagate to a late frame's stamp
+
+
+def pose_at(estimate: StateEstimate, t: float) -> np.ndarray:
+    """The estimated base pose (4×4, navigation frame) at ``t``, extrapolated from ``estimate`` with its velocity and yaw rate."""
+    dt = t - estimate.stamp
+    R = rotation_matrix(estimate.orientation)
+    if dt != 0.0:
+        yaw_rate = float((R @ np.asarray(estimate.angular_velocity))[2])  # body rates → about the frame's z
+        R = rot_z(yaw_rate * dt) @ R
+    return transform(np.asarray(estimate.position) + np.asarray(estimate.velocity) * dt, R)
+
+
+class EstimateHistory:
+    """A robot's onboard estimates of the last ``window`` s; its pose at a time in (or just past) that window."""
+
+    def __init__(self, window: float = ESTIMATE_WINDOW):
+        self.window = window
+        self.samples: deque[StateEstimate] = deque()
+
+    def add(self, estimate: StateEstimate | None) -> None:
+        """Keep ``estimate`` if it is newer than the last one kept."""
+        if estimate is None or (self.samples and estimate.stamp <= self.samples[-1].stamp):
+            return
+        self.samples.append(estimate)
+        while len(self.samples) > 2 and self.samples[1].stamp < estimate.stamp - self.window:
+            self.samples.popleft()
+
+    @property
+    def latest(self) -> StateEstimate | None:
+        """The newest estimate kept (``None``: none yet)."""
+        return self.samples[-1] if self.samples else None
+
+    def at(self, t: float) -> np.ndarray | None:
+        """The pose (4×4) at ``t``, propagated from the newest estimate not later than ``t`` (or the oldest one)."""
+        if not self.samples:
+            return None
+        chosen = self.samples[0]
+        for estimate in reversed(self.samples):
+            if estimate.stamp <= t:
+                chosen = estimate
+                break
+        return pose_at(chosen, t)
+
+
+class RelativePoseFilter:
+    """``C``, the drift between the carrier's frame N and the UAV's frame O, and its rate, re-anchored by each P_Q^M.
+
+    ``C`` is a turn about z and a translation ``t_C`` that moves at the
+    horizontal drift rate ``d`` (m/s, in N): the UAV's horizontal velocity
+    estimate is biased (its optical flow measures the velocity over the
+    surface under it, the carrier's moving deck or arm), so
+    ``T_N_Q = C(t) · T_O_Q`` with ``t_C(t) = t_C(t_k) + d · (t − t_k)``; its
+    height is anchored by the sonar and barometer, so ``d`` has no vertical
+    part (a height step is corrected by ``gain`` alone).
+    Before any measurement ``C`` is the identity and ``d`` zero (both frames
+    start at the world frame the mission declares). The first measurement
+    sets ``C``; every later one is compared with the prediction at its stamp:
+    the innovation (position in M, heading) corrects ``t_C`` by ``gain`` and
+    ``d`` by ``rate_gain`` per second since the last measurement (an α-β
+    filter), the heading by ``gain``. A measurement farther from the
+    prediction than ``gate + gate_rate · age`` (m; ``age``: s since the last
+    accepted one; heading: the same over 0.1 m) is an outlier (a tag at the
+    image border, a wrong planar-pose branch) and is dropped, unless
+    ``max_rejections`` come in a row: then the prediction itself is wrong and
+    the filter restarts from the measurement.
+
+    Args:
+        gain: weight (0…1] of a measurement in the pose; rate_gain: in the drift rate (0…1);
+        gate: outlier threshold (m); gate_rate: its growth with the age of the last measurement (m/s);
+        max_rejections: consecutive outliers that restart the filter; max_rate: bound of ``d`` (m/s);
+        rate_horizon: how long (s) after the last measurement ``d`` is trusted (the surface under the UAV changes).
+    """
+
+    def __init__(
+        self, gain: float = 0.8, gate: float = 0.03, max_rejections: int = 5,
+        rate_gain: float = 0.15, gate_rate: float = 0.6, max_rate: float = 1.5, rate_horizon: float = 1.0,
+    ):
+        if not 0.0 < gain <= 1.0 or gate <= 0.0 or max_rejections < 1 or not 0.0 <= rate_gain < 1.0 or gate_rate < 0.0:
+            raise ValueError(
+                "RelativePoseFilter needs 0 < gain <= 1, gate > 0, max_rejections >= 1, 0 <= rate_gain < 1, gate_rate >= 0; "
+                f"got {gain}, {gate}, {max_rejections}, {rate_gain}, {gate_rate}"
+            )
+        self.gain, self.gate, self.max_rejections = gain, gate, max_rejections
+        self.rate_gain, self.gate_rate, self.max_rate, self.rate_horizon = rate_gain, gate_rate, max_rate, rate_horizon
+        self.C = np.eye(4)  # T_N_O at t_ref: the UAV's odometry frame in the carrier's navigation frame
+        self.rate = np.zeros(3)  # d: drift rate of C's translation (m/s, N)
+        self.t_ref = 0.0
+        self.measured = False
+        self.rejections = 0
+
+    def rate_at(self, t: float) -> np.ndarray:
+        """The drift rate (m/s, N) at ``t``: zero once the last measurement is older than ``rate_horizon`` (no longer known)."""
+        return self.rate if t - self.t_ref <= self.rate_horizon else np.zeros(3)
+
+    def drift(self, t: float) -> np.ndarray:
+        """``C`` (4×4) at ``t`` (s): its translation moved on at the drift rate, for at most ``rate_horizon`` s."""
+        C = self.C.copy()
+        C[:3, 3] += self.rate * min(max(t - self.t_ref, 0.0), self.rate_horizon)
+        return C
+
+    def predict(self, T_N_M: np.ndarray, T_O_Q: np.ndarray, t: float | None = None) -> np.ndarray:
+        """P_Q^M (4×4) at ``t`` (s; ``None``: at the last measurement) from the two robots' estimates and the drift."""
+        R_N_M, p_N_M = T_N_M[:3, :3], T_N_M[:3, 3]
+        T_N_Q = (self.C if t is None else self.drift(t)) @ T_O_Q
+        return transform(R_N_M.T @ (T_N_Q[:3, 3] - p_N_M), R_N_M.T @ T_N_Q[:3, :3])
+
+    def measure(self, T_M_Q: np.ndarray, T_N_M: np.ndarray, T_O_Q: np.ndarray, t: float | None = None) -> bool:
+        """Fuse P_Q^M measured at ``t`` (s) when the estimates read ``T_N_M``, ``T_O_Q``; False when it was rejected."""
+        t = self.t_ref if t is None else t
+        predicted = self.predict(T_N_M, T_O_Q, t)
+        dp = T_M_Q[:3, 3] - predicted[:3, 3]
+        dyaw = math.remainder(yaw_of_rotation(T_M_Q[:3, :3]) - yaw_of_rotation(predicted[:3, :3]), math.tau)
+        age = max(t - self.t_ref, 0.0)
+        gain, rate_gain = 1.0, 0.0
+        if self.measured and self.rejections < self.max_rejections:
+            gate = self.gate + self.gate_rate * age
+            if np.linalg.norm(dp) > gate or abs(dyaw) * 0.1 > gate:
+                self.rejections += 1
+                return False
+            gain, rate_gain = self.gain, self.rate_gain
+        self.rejections = 0
+        dp_N = T_N_M[:3, :3] @ dp
+        if age > 1e-6 and rate_gain > 0.0:  # horizontal only: the height is anchored by the sonar and barometer
+            self.rate[:2] = self.rate[:2] + rate_gain * dp_N[:2] / max(age, 0.05)
+            speed = float(np.linalg.norm(self.rate))
+            if speed > self.max_rate:
+                self.rate *= self.max_rate / speed
+        self.measured = True
+        p_fused_N = T_N_M[:3, :3] @ predicted[:3, 3] + T_N_M[:3, 3] + gain * dp_N
+        R_C = rot_z(gain * dyaw) @ self.C[:3, :3]  # turning C about z turns the predicted heading in M as much
+        R_C = rot_z(yaw_of_rotation(R_C))  # C stays a turn about z: roll and pitch are the UAV's IMU's
+        self.C = transform(p_fused_N - R_C @ T_O_Q[:3, 3], R_C)
+        self.t_ref = t
+        return True
+
+
+@dataclass(frozen=True)
+class RelativeState:
+    """The UAV relative to the carrier now, from the estimates and the last frames.
+
+    Attributes:
+        t: time (s) of this state.
+        T_M_Q: P_Q^M (4×4), ``None`` until both robots' estimates are known.
+        v_M: the UAV's velocity relative to frame M, in M's axes (m/s).
+        drift_M: the drift rate of the UAV's odometry against the carrier's frame, in M's axes (m/s):
+            what the UAV's velocity estimate lacks, added to its commands (:func:`~.relative_hold.command_hold`).
+        uav_speed: the UAV's ground speed (m/s), from its estimate.
+        measured: True once a camera frame anchored the estimate.
+        seen_at: stamp (s) of the last frame fused (−inf: none).
+    """
+
+    t: float
+    T_M_Q: np.ndarray | None = field(default=None, repr=False)
+    v_M: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    drift_M: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    uav_speed: float = 0.0
+    measured: bool = False
+    seen_at: float = -math.inf
+
+    @property
+    def yaw_M(self) -> float | None:
+        """UAV heading in M (rad), ``None`` without a pose."""
+        return None if self.T_M_Q is None else yaw_of_rotation(self.T_M_Q[:3, :3])
+
+
+class RelativePose:
+    """P_Q^M now: :class:`RelativePoseFilter` over the carrier's estimate, the UAV's link telemetry and the eye-in-hand frames.
+
+    Runs on the carrier's computer: the carrier's own estimate, the UAV's as
+    the team link delivers it, the frames of the carrier's
+    :class:`~.observer.EyeInHandObserver`; sends each accepted frame to the
+    UAV as a vision fix (the module docstring).
+
+    Args:
+        carrier: the carrier's onboard interface (``estimate()``, ``arm_mount()``).
+        link: the team link as the carrier uses it (``latest(uav)``, ``send``).
+        uav: the UAV's name.
+        observer: the carrier's eye-in-hand observer; ``None``: the estimates alone, no frame fused.
+        gain, gate: of the :class:`RelativePoseFilter`.
+        since: UAV telemetry stamped before this time (s) is ignored (e.g. before its estimator was reset).
+    """
+
+    def __init__(self, carrier, link, uav: str, observer, gain: float = 0.8, gate: float = 0.03, since: float = -math.inf):
+        self.carrier, self.link, self.uav, self.observer = carrier, link, uav, observer
+        self.T_base_M = transform(*carrier.arm_mount())  # M in the footprint frame the carrier's estimate is of
+        self.filter = RelativePoseFilter(gain, gate)
+        self.carrier_history = EstimateHistory()
+        self.uav_history = EstimateHistory()
+        self.fused_stamp = -math.inf
+        self.seen_at = -math.inf
+        self.since = since
+
+    def T_N_M(self, t: float) -> np.ndarray | None:
+        """Frame M in the carrier's navigation frame at ``t``, from its estimate."""
+        T_N_base = self.carrier_history.at(t)
+        return None if T_N_base is None else T_N_base @ self.T_base_M
+
+    def send_fix(self, T_N_Q: np.ndarray, stamp: float) -> None:
+        """Send the UAV its pose in N measured at ``stamp`` (s) over the team link (once per frame)."""
+        fix = VisionFix(stamp, tuple(float(v) for v in T_N_Q[:3, 3]), yaw_of_rotation(T_N_Q[:3, :3]), f"{self.carrier.name}/eye_in_hand")
+        self.link.send(vision_fix_topic(self.uav), fix)
+
+    def update(self, now: float) -> RelativeState:
+        """Read the estimates, fuse a new frame in which the bundle was measured, and propagate to ``now``."""
+        self.carrier_history.add(self.carrier.estimate())
+        message = self.link.latest(self.uav)
+        if message is not None and message.payload.stamp >= self.since:
+            self.uav_history.add(message.payload)
+        observation = None if self.observer is None else self.observer.observe(now)
+        if observation is not None and observation.seen and observation.stamp > self.fused_stamp:
+            self.fused_stamp = observation.stamp
+            T_N_M, T_O_Q = self.T_N_M(observation.stamp), self.uav_history.at(observation.stamp)
+            if T_N_M is not None and T_O_Q is not None and self.filter.measure(
+                observation.pose.T_M_Q, T_N_M, T_O_Q, observation.stamp
+            ):
+                self.seen_at = observation.stamp
+                self.send_fix(T_N_M @ observation.pose.T_M_Q, observation.stamp)
+        T_N_M, T_O_Q = self.T_N_M(now), self.uav_history.at(now)
+        if T_N_M is None or T_O_Q is None:
+            return RelativeState(now, seen_at=self.seen_at)
+        T_M_Q = self.filter.predict(T_N_M, T_O_Q, now)
+        uav, carrier = self.uav_history.latest, self.carrier_history.latest
+        drift_N = self.filter.rate_at(now)
+        v_uav_N = self.filter.C[:3, :3] @ np.asarray(uav.velocity) + drift_N
+        R_N_base = rotation_matrix(carrier.orientation)
+        w_N = R_N_base @ np.asarray(carrier.angular_velocity)
+        p_uav_N = (T_N_M @ np.append(T_M_Q[:3, 3], 1.0))[:3]
+        v_frame_N = np.asarray(carrier.velocity) + np.cross(w_N, p_uav_N - carrier.position)  # M's point under the UAV
+        v_M = T_N_M[:3, :3].T @ (v_uav_N - v_frame_N)
+        drift_M = T_N_M[:3, :3].T @ drift_N
+        speed = float(np.linalg.norm(v_uav_N))
+        return RelativeState(now, T_M_Q, v_M, drift_M, speed, self.filter.measured, self.seen_at)

@@ -1,0 +1,246 @@
+"""pydantic validation errors turned into located :class:`~marsupial.trees.errors.MissionError` errors.
+
+Each error names the YAML key path (union tags dropped), its file:line:column,
+what was expected and, for unknown keys, the closest known key.
+"""
+
+from __future__ import annotations
+
+import functools
+import types
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Annotated, Any, Literal, Union, get_args, get_origin
+
+from pydantic import (
+    BaseModel,
+    Tag,
+    TypeAdapter,
+    ValidationError,
+)
+
+from ..errors import KeyPathLike, MissionError, combine_errors, one_of, suggest
+from ..yaml_source import SourceDoc
+from .nodes import NODE_CLASSES, NODE_KINDS
+
+MAX_REPORTED_ERRORS = 5
+
+
+# ------------------------------------------------------- validation errors -> MissionError
+
+_EXPECTATIONS = {
+    "int_type": "an integer", "int_parsing": "an integer", "int_from_float": "an integer",
+    "float_type": "a number", "float_parsing": "a number", "string_type": "a string",
+    "bool_type": "true or false", "bool_parsing": "true or false", "list_type": "a list",
+    "dict_type": "a mapping", "model_type": "a mapping", "model_attributes_type": "a mapping",
+    "literal_error": "{expected}", "greater_than": "a value > {gt}", "greater_than_equal": "a value >= {ge}",
+    "less_than": "a value < {lt}", "less_than_equal": "a value <= {le}",
+    "too_short": "at least {min_length} item(s)", "too_long": "at most {max_length} item(s)",
+    "string_too_short": "a non-empty string", "none_required": "null",
+    "finite_number": "a finite number", "string_pattern_mismatch": "printable text (no control characters)",
+    "string_too_long": "at most {max_length} characters", "tuple_type": "a list", "float_from_bool": "a number",
+}
+
+
+def unwrap(tp: Any) -> Any:
+    """``X | None`` -> ``X``; ``Annotated[X, …]`` -> ``X``."""
+    while True:
+        if get_origin(tp) is Annotated:
+            tp = get_args(tp)[0]
+        elif get_origin(tp) in (Union, types.UnionType):
+            members = [m for m in get_args(tp) if m is not type(None)]
+            if len(members) != 1 or _tag_map(tp):
+                return tp
+            tp = members[0]
+        else:
+            return tp
+
+
+def _tag_map(tp: Any) -> dict[str, Any]:
+    """Tag -> member type of a tagged (discriminated) union, ``{}`` for any other type."""
+    if get_origin(tp) is Annotated:
+        tp = get_args(tp)[0]
+    tags = {}
+    if get_origin(tp) in (Union, types.UnionType):
+        for member in get_args(tp):
+            if get_origin(member) is Annotated:
+                tags.update({m.tag: get_args(member)[0] for m in get_args(member)[1:] if isinstance(m, Tag)})
+    return tags
+
+
+def _describe(tp: Any) -> str:
+    """What a value of type ``tp`` looks like, in words ("an integer", "a node …")."""
+    if _tag_map(tp):
+        return f"a node ({one_of(_tag_map(tp))})"
+    tp = unwrap(tp)
+    origin = get_origin(tp)
+    if origin is Literal:
+        return one_of(repr(a) for a in get_args(tp))
+    if origin is list:
+        return "a list"
+    if origin is dict:
+        return "a mapping"
+    if isinstance(tp, type) and issubclass(tp, BaseModel):
+        required = [n for n, f in tp.model_fields.items() if f.is_required()]
+        return f"a mapping with {', '.join(required)}" if required else "a mapping"
+    return {int: "an integer", float: "a number", str: "a string", bool: "true or false"}.get(tp, "a value")
+
+
+@dataclass
+class _LocWalk:
+    """A pydantic error location mapped back onto the YAML document."""
+
+    path: tuple  # key path as written in the YAML (union tags dropped)
+    model: type[BaseModel] | None  # the model that holds the last key
+    annotation: Any  # declared type at the path
+    value: Any  # the YAML value at the path (None if absent)
+
+
+_ABSENT = object()
+
+
+def walk_location(loc: tuple, root: Any, data: Any) -> _LocWalk:
+    path: list = []
+    tp, value, model = root, data, None
+    for item in loc:
+        tags = _tag_map(tp)
+        if item in tags:  # a tagged-union member: not a YAML key
+            tp = tags[item]
+            continue
+        tp = unwrap(tp)
+        origin = get_origin(tp)
+        if isinstance(tp, type) and issubclass(tp, BaseModel):
+            model = tp
+            tp = tp.model_fields[item].annotation if item in tp.model_fields else Any
+        elif origin is list:
+            tp = get_args(tp)[0]
+            if item == 0 and not isinstance(value, list):  # a single item written without a list
+                continue
+        elif origin is dict:
+            tp = get_args(tp)[1]
+        else:
+            tp = Any
+        path.append(item)
+        try:
+            value = value[item]
+        except (KeyError, IndexError, TypeError):
+            value = _ABSENT
+    return _LocWalk(tuple(path), model, tp, None if value is _ABSENT else value)
+
+
+def _node_error(walk: _LocWalk) -> tuple[tuple, str, str, str | None]:
+    """(key path, message, expected, suggestion) for a mapping whose node type cannot be told."""
+    value, kinds = walk.value, one_of(NODE_KINDS)
+    if not isinstance(value, Mapping):
+        expected = f"a mapping with one of {', '.join(NODE_KINDS)} (e.g. {{skill: wait}})"
+        return walk.path, f"expected a node, got {_show(value)}", expected, None
+    present = [k for k in NODE_KINDS if k in value]
+    if len(present) > 1:
+        found = ", ".join(f"'{k}'" for k in present)
+        return walk.path, f"a node has exactly one node type key, found {found}", kinds, None
+    known_fields = {f for cls in NODE_CLASSES.values() for f in cls.model_fields}
+    unknown = [k for k in value if k not in known_fields]
+    for key in unknown:
+        if suggest(key, NODE_KINDS):
+            return walk.path + (key,), f"unknown node type '{key}'", kinds, suggest(key, NODE_KINDS)
+    if unknown:
+        return walk.path + (unknown[0],), f"unknown node type '{unknown[0]}'", kinds, None
+    return walk.path, "node has no node type key", kinds, None
+
+
+def _show(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _convert(err: Mapping[str, Any], root: Any, data: Any) -> tuple[tuple, str, str | None, str | None]:
+    """(key path, message, expected, suggestion) of one pydantic error."""
+    walk = walk_location(tuple(err["loc"]), root, data)
+    kind, ctx = err["type"], err.get("ctx") or {}
+    if kind in ("union_tag_not_found", "union_tag_invalid"):
+        return _node_error(walk)
+    if kind == "extra_forbidden":
+        key = walk.path[-1]
+        known = list(walk.model.model_fields) if walk.model else []
+        return walk.path, f"unknown key '{key}'", one_of(known), suggest(key, known)
+    if kind == "missing":
+        return walk.path, f"missing required key '{walk.path[-1]}'", _describe(walk.annotation), None
+    if "expected" in ctx and kind not in _EXPECTATIONS:  # our own checks (PydanticCustomError)
+        return walk.path + tuple(ctx.get("at", ())), err["msg"], ctx["expected"], ctx.get("suggestion")
+    if kind in _EXPECTATIONS:
+        limits = {k: f"{v:g}" if isinstance(v, float) else v for k, v in ctx.items()}
+        return walk.path, f"invalid value {_show(err['input'])}", _EXPECTATIONS[kind].format(**limits), None
+    return walk.path, err["msg"], None, None
+
+
+def validation_errors(
+    exc: ValidationError,
+    source: SourceDoc,
+    base_path: KeyPathLike = (),
+    root: Any = None,
+    data: Any = None,
+    notes: Mapping[tuple, str] | None = None,
+    note: str | None = None,
+) -> list[MissionError]:
+    """A :class:`MissionError` for each error of a pydantic ``ValidationError``.
+
+    ``exc`` came from validating ``data`` (found at ``base_path`` of ``source``)
+    against ``root`` (a model class or type; ``None``: locations are taken as
+    they are). Each error names the YAML key path (union tags dropped), its
+    file:line:column, what was expected and, for unknown keys, the closest
+    known key. ``notes`` adds lines to errors at or under given key paths
+    (values set by overrides or ``${name}`` references); ``note`` to all
+    (inside a subtree).
+    """
+    errors = []
+    for err in exc.errors():
+        rel, message, expected, suggestion = _convert(err, root if root is not None else Any, data)
+        path = tuple(base_path) + rel
+        lines = [n for p, n in (notes or {}).items() if path[: len(p)] == p] + ([note] if note else [])
+        errors.append(source.error(path, message, expected, suggestion, "; ".join(lines) or None))
+    return errors
+
+
+def errors_from_validation(
+    exc: ValidationError,
+    source: SourceDoc,
+    base_path: KeyPathLike = (),
+    root: Any = None,
+    data: Any = None,
+    notes: Mapping[tuple, str] | None = None,
+    note: str | None = None,
+) -> MissionError:
+    """:func:`validation_errors` as one :class:`MissionError` (a :class:`MissionErrors` if several)."""
+    return combine_errors(validation_errors(exc, source, base_path, root, data, notes, note), MAX_REPORTED_ERRORS)
+
+
+@functools.cache
+def _adapter(model: Any) -> TypeAdapter:
+    return TypeAdapter(model)
+
+
+def validate_source(
+    model: Any,
+    data: Any,
+    source: SourceDoc,
+    base_path: KeyPathLike = (),
+    pending: Sequence[MissionError] = (),
+    notes: Mapping[tuple, str] | None = None,
+    note: str | None = None,
+) -> Any:
+    """``data`` (found at ``base_path`` of ``source``) validated against ``model`` (a type).
+
+    ``pending`` errors found before (unknown ``${name}`` references, whose
+    strings were left as written) are raised together with the validation
+    errors, in file order; validation errors under a pending error's key path
+    are dropped as its consequences.
+    """
+    errors, value = list(pending), None
+    try:
+        value = _adapter(model).validate_python(data)
+    except ValidationError as exc:
+        found = validation_errors(exc, source, base_path, model, data, notes, note)
+        errors += [e for e in found if not any(e.key_path[: len(p.key_path)] == p.key_path for p in pending)]
+    if errors:
+        raise combine_errors(errors, MAX_REPORTED_ERRORS)
+    return value
