@@ -294,6 +294,7 @@ def write_mission_copy(folder: Path, mission_name: str, text: str, subtree_texts
 
     Keys that would leave ``folder`` (absolute, or with ``..``) are refused with a :class:`MissionError`.
     """
+    folder.mkdir(parents=True, exist_ok=True)
     mission_file = folder / f"{Path(mission_name).name or 'mission'}.yaml"
     mission_file.write_text(text)
     for key, body in subtree_texts.items():

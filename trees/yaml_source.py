@@ -7,7 +7,7 @@ compiler — can name the exact place in the file.
 
 Scalars follow YAML 1.2 where YAML 1.1 surprises: only ``true``/``false`` are
 booleans (``yes``, ``no``, ``on``, ``off`` stay strings, so ``{operator: no}``
-means the command "no"), and ``1e3`` is a float.
+means the command "no"), and ``1e3`` and ``1.0e6`` are floats.
 
 Hostile documents are refused with a located error, not a hang or a
 traceback: at most :data:`MAX_VALUES` values after alias expansion (a
@@ -44,7 +44,10 @@ class _Loader(yaml.SafeLoader):
 
 
 _Loader.add_implicit_resolver(_BOOL_TAG, re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF"))
-_Loader.add_implicit_resolver(_FLOAT_TAG, re.compile(r"^[-+]?[0-9][0-9_]*[eE][-+]?[0-9]+$"), list("-+0123456789"))
+# YAML 1.2 floats with an exponent: 1e3, 1.0e6, 2.5E-3 (YAML 1.1 wants a signed exponent after a dot)
+_Loader.add_implicit_resolver(
+    _FLOAT_TAG, re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"), list("-+.0123456789")
+)
 
 
 def _position(mark: yaml.Mark) -> Position:
