@@ -590,6 +590,17 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path, cycles: 
         "take-off from a moving platform, a filter started from the UAV's own estimated velocity (onboard data). "
         "`velocity_feedforward: false` gives the paper's predictive controller (the *predictive (paper)* rows), "
         "whose filter starts empty.",
+        "- Beyond the paper, with the feed-forward only (`skills/landing/flowframe.py`): the UAV's optical flow "
+        "measures its velocity relative to the surface under the camera, so once the 1 m platform fills the flow "
+        "field (≈1.3–1.9 m, with the platform's heading) the estimate's frame rides the platform and the platform's "
+        "velocity in it drops to ≈0 within the estimator's ≈0.13 s. The tracker predicts which surface the flow's "
+        "median ray meets (flow field half-angle, platform size, sonar height, filter position, detected heading); "
+        "near the switch it adds the flow-made part of the estimated velocity's change (estimate minus integrated "
+        "IMU, bias removed) to the filter's velocity, and with the flow on the platform it holds that velocity at "
+        "zero. The paper's controller (no feed-forward) has no such handling.",
+        "- The abort 'error over 0.25 m below 0.7 m' (§3.3.1) tests the UAV's sonar height now against the latest "
+        "location (arrived within 0.5 s): the platform fills the view below ≈0.72 m, so the last location is taken "
+        "just above 0.7 m and a test on the location's own height would never fire.",
         "- Departures from the paper in what the controllers see: the paper's Gazebo node projected detections with "
         "the simulator's pose of the drone; here every frame is posed with the UAV's onboard estimate at the frame's "
         "stamp (the video arrives ≈0.1 s late) composed with the camera's URDF mount, and the Kalman filter runs in "

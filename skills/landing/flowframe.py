@@ -118,6 +118,7 @@ class FrameShift:
         self.total = np.zeros(2)  # shift applied over the present window (m/s), for the record
         self._stamp: float | None = None
         self._velocity = np.zeros(2)
+        self._inertial = np.zeros(2)  # ∫R f dt (m/s) since the last estimate used
         self._imu_stamp = -math.inf
 
     def active(self, stamp: float) -> bool:
@@ -143,18 +144,18 @@ class FrameShift:
         """
         velocity = np.asarray(velocity_xy, dtype=float)[:2]
         R = np.asarray(R_nav_body, dtype=float)
-        inertial = np.zeros(2)
         for t, f in imu:
             if t > self._imu_stamp:
                 if math.isfinite(self._imu_stamp):
-                    inertial += (R[:2] @ np.asarray(f, dtype=float)) * (t - self._imu_stamp)
+                    self._inertial += (R[:2] @ np.asarray(f, dtype=float)) * (t - self._imu_stamp)
                 self._imu_stamp = t
         if self._stamp is None or stamp <= self._stamp:
             if self._stamp is None:
-                self._stamp, self._velocity = stamp, velocity
-            return np.zeros(2)
+                self._stamp, self._velocity, self._inertial = stamp, velocity, np.zeros(2)
+            return np.zeros(2)  # the IMU's integral waits for the next estimate
         dt = stamp - self._stamp
-        flow_made = velocity - self._velocity - inertial  # what the flow corrections changed (+ bias)
+        flow_made = velocity - self._velocity - self._inertial  # what the flow corrections changed (+ bias)
+        self._inertial = np.zeros(2)
         self._stamp, self._velocity = stamp, velocity
         if switching:
             if stamp > self.until:

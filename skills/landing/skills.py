@@ -26,8 +26,9 @@ measured platform position, §3.3.1; predictive: the Kalman prediction,
 §3.3.2), the gain schedule with ``gain_schedule`` (``table1``: the printed
 law, default; ``manual_fit``: see :mod:`.control`) and, beyond the paper,
 ``velocity_feedforward`` (predictive mode, on by default: the filter's
-platform velocity is added to the PI output; off reproduces the paper's
-predictive controller). Heights are sonar readings above the platform (m),
+platform velocity is added to the PI output, and the filter follows the
+estimate's frame when the optical flow changes between floor and platform,
+:mod:`.flowframe`; off reproduces the paper's predictive controller). Heights are sonar readings above the platform (m),
 speeds m/s, times simulated s.
 """
 
@@ -56,7 +57,7 @@ class FlightParams(NodeParams):
     gain_schedule: GainSchedule = "table1"
     """PI gains K = Q·exp(-T·p_z): ``table1`` (T = 0.002 /m, the printed law, Table 1) or ``manual_fit`` (T fitted to K_p 0.45, K_i 0.1 at 4 m)."""
     velocity_feedforward: bool = True
-    """Predictive mode: add the Kalman filter's platform velocity to the PI output (not in the paper; ``false``: the paper's predictive controller). The reactive controller has no filter and never uses it."""
+    """Predictive mode: add the Kalman filter's platform velocity to the PI output and keep that velocity in the estimate's frame when the optical flow changes surfaces (not in the paper; ``false``: the paper's predictive controller). The reactive controller has no filter and never uses it."""
     path_time_s: float | None = Field(None, ge=0.0)
     """How far ahead the prediction is taken (s). Default: 0.1 s (§3.3.2) without the feed-forward, 0 with it (the feed-forward supplies the lead)."""
     integral_band: float = Field(0.1, gt=0.0)

@@ -42,6 +42,11 @@ test; the reactive controller, which has nothing but its latest
 measurement, takes it as the platform under the image centre (the paper's
 centroid of the visible part), the predictive one extrapolates its filter.
 
+With the velocity feed-forward (ours), the filter follows the estimate's
+frame when the optical flow changes between floor and platform
+(:mod:`.flowframe`): low over the platform the flow measures the velocity
+relative to it, and the platform is nearly still in the estimate's frame.
+
 The tracking errors against ground truth are the run's referee's
 (``world/scoring.py``), not the module's. Positions m, velocities m/s,
 angles rad, times simulated s.
