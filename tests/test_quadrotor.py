@@ -288,7 +288,7 @@ def test_ardrone2_bottom_camera_sees_a_red_platform_below():
 
 def test_tag_bundle_layout_matches_the_urdf_links():
     bundle = load_tag_bundle()
-    assert bundle.family == "tag36h11" and bundle.ids == [0, 1, 2, 3]
+    assert bundle.family == "tag36h11" and bundle.ids == [0, 1, 2, 3, 4]  # 4: the 2.4 cm contact tag
     assert bundle.object_points([2, 0]).shape == (8, 3)
     with World() as world:
         uav = world.add_robot("bebop2", pose=[0, 0, 1, 0.4])
@@ -331,7 +331,8 @@ def test_tag_bundle_is_detected_unmirrored_from_below(distance, yaw):
         ok, rvec, tvec = cv2.solvePnP(points, pixels, frame.K, None, flags=cv2.SOLVEPNP_SQPNP)
         R_cam_link = cv2.Rodrigues(rvec)[0]
         p_est = frame.rotation @ tvec.ravel() + frame.position
-        assert ok and np.linalg.norm(p_est - p_link) < 0.02 * distance + 0.005
+        # 3 % of the range: at 1.5 m only the 10.4 cm tag is resolved (it gave plate room to the contact tag)
+        assert ok and np.linalg.norm(p_est - p_link) < 0.03 * distance + 0.005
         R_err = (frame.rotation @ R_cam_link).T @ R_world_link
         angle = math.acos(min(1.0, (np.trace(R_err) - 1) / 2))
         assert angle < 0.02 + 0.12 * distance  # a small planar target: its tilt blurs with range
