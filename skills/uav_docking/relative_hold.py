@@ -171,14 +171,16 @@ def command_hold(uav: Any, state: RelativeState, p_target_M: np.ndarray, yaw_tar
 
 
 def relative_pose_of(
-    skill: Skill, carrier: Any, gain: float = 0.8, gate: float = 0.03, fuse: bool = True, since: float = -math.inf
+    skill: Skill, carrier: Any, gain: float = 0.8, gate: float = 0.03, fuse: bool = True, since: float = -math.inf,
+    vision_fixes: bool = False,
 ) -> RelativePose:
     """The :class:`~.relative_pose.RelativePose` of ``skill``'s UAV relative to ``carrier``, computed on the carrier.
 
-    ``fuse`` False: the estimates alone (no frame); ``since``: ignore UAV telemetry stamped earlier (s).
+    ``fuse`` False: the estimates alone (no frame); ``since``: ignore UAV telemetry stamped earlier (s);
+    ``vision_fixes``: also send each accepted frame to the UAV's estimator as an external fix.
     """
     observer = EyeInHandObserver.of(skill.context, carrier) if fuse else None
-    return RelativePose(carrier, skill.context.link(carrier.name), skill.robot_name, observer, gain, gate, since)
+    return RelativePose(carrier, skill.context.link(carrier.name), skill.robot_name, observer, gain, gate, since, vision_fixes)
 
 
 class RelativeHold(Skill):

@@ -177,6 +177,8 @@ class Track(Skill):
         against truth at 0.8 in a 25 s encounter, 6.3 cm at 0.3)."""
         fusion_gate: float = Field(0.03, gt=0.0)
         """Measurements farther than this (m) from the predicted pose are outliers (:class:`~.relative_pose.RelativePoseFilter`)."""
+        vision_fixes: bool = False
+        """Send each accepted camera frame to the UAV's estimator as an external vision fix (opt-in: measured worse)."""
         f_B: float = Field(4.0, gt=0.0)
         """Planning-and-optimisation rate f_B (Hz), §IV-A; merge and selection run at f_O = 2·f_B."""
 
@@ -194,7 +196,7 @@ class Track(Skill):
         self.carrier = carrier_port(self, p.carrier)
         kinematics = self.carrier.arm_kinematics
         self.kinematics = kinematics
-        self.relative = relative_pose_of(self, self.carrier, p.fusion_gain, p.fusion_gate)
+        self.relative = relative_pose_of(self, self.carrier, p.fusion_gain, p.fusion_gate, vision_fixes=p.vision_fixes)
         self.lidar = self.carrier.sensor("lidar")
         self.tracking_zones = carrier_zones(kinematics, "mobile_manipulator.urdf")
         self.tracking_vicinity = VicinityParams()
