@@ -65,6 +65,9 @@ def pose_at(estimate: StateEstimate, t: float) -> np.ndarray:
     return transform(np.asarray(estimate.position) + np.asarray(estimate.velocity) * dt, R)
 
 
+MAX_FRAME_AGE_S = 0.5  # s: older frames are not fused (the estimates would be extrapolated to their stamp)
+
+
 class EstimateHistory:
     """A robot's onboard estimates of the last ``window`` s; its pose at a time in (or just past) that window."""
 
@@ -266,7 +269,8 @@ class RelativePose:
         if message is not None and message.payload.stamp >= self.since:
             self.uav_history.add(message.payload)
         observation = None if self.observer is None else self.observer.observe(now)
-        if observation is not None and observation.seen and observation.stamp > self.fused_stamp:
+        fresh = observation is not None and observation.stamp >= now - MAX_FRAME_AGE_S  # not a frame from before this skill
+        if fresh and observation.seen and observation.stamp > self.fused_stamp:
             self.fused_stamp = observation.stamp
             T_N_M, T_O_Q = self.T_N_M(observation.stamp), self.uav_history.at(observation.stamp)
             if T_N_M is not None and T_O_Q is not None and self.filter.measure(
