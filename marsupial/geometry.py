@@ -57,20 +57,6 @@ def quaternion_from_yaw(yaw: float) -> np.ndarray:
     return np.array([0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)])
 
 
-def quaternion_from_euler(roll: float, pitch: float, yaw: float) -> np.ndarray:
-    """``[x, y, z, w]`` quaternion of the z-y-x (yaw, pitch, roll) Euler angles (rad)."""
-    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
-    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
-    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
-    return np.array(
-        [
-            sr * cp * cy - cr * sp * sy,
-            cr * sp * cy + sr * cp * sy,
-            cr * cp * sy - sr * sp * cy,
-            cr * cp * cy + sr * sp * sy,
-        ]
-    )
-
 
 def rot_z(angle: float) -> np.ndarray:
     """3×3 rotation by ``angle`` rad about z."""
@@ -90,8 +76,3 @@ def transform(position: Sequence[float], R: np.ndarray) -> np.ndarray:
     T[:3, :3] = R
     T[:3, 3] = position
     return T
-
-
-def wrap_angle(angle: float) -> float:
-    """``angle`` wrapped into [-π, π) (rad)."""
-    return (angle + math.pi) % math.tau - math.pi

@@ -111,11 +111,6 @@ class RunContext:
         self.__world = world
         self.__plan = None
 
-    @property
-    def running(self) -> bool:
-        """True when the context has a world to run in (False for trees compiled only to draw or export)."""
-        return self.__world is not None
-
     def _require_world(self, what: str) -> World:
         if self.__world is None:
             raise RuntimeError(f"{what}: the tree was compiled without a world and cannot run")
@@ -126,11 +121,6 @@ class RunContext:
         """Simulated time (s) of the run (0 without a world)."""
         return self.__world.now if self.__world is not None else 0.0
 
-    @property
-    def tick_period(self) -> float:
-        """Physics step (s): the finest time step of the run."""
-        return self._require_world("tick_period").clock.dt
-
     def rng(self, key: str) -> np.random.Generator:
         """A seeded random stream for ``key`` (derived from the run's seed; e.g. a planner's samples)."""
         return self._require_world(f"rng({key!r})").rng_for(f"node/{key}")
@@ -138,10 +128,6 @@ class RunContext:
     def team(self) -> tuple[str, ...]:
         """Names of the team members."""
         return tuple(self.__world.robots) if self.__world is not None else ()
-
-    def kind_of(self, name: str) -> str:
-        """Kind of team member ``name`` (``"bebop2"``, …)."""
-        return self._require_world(f"robot '{name}'").robot(name).kind
 
     def onboard(self, name: str) -> Any:
         """The onboard interface of team member ``name`` (:mod:`marsupial.world.onboard`); the error lists the team."""
