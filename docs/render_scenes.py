@@ -14,6 +14,7 @@ paths drawn as dashed lines, each labelled. A scene with small features
 
 from __future__ import annotations
 
+import itertools
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -167,7 +168,7 @@ def _annotate(
 def _densify(points: np.ndarray, step: float) -> np.ndarray:
     """Points every ``step`` metres along the polyline ``points`` (N, 2)."""
     out = [points[0]]
-    for a, b in zip(points[:-1], points[1:]):
+    for a, b in itertools.pairwise(points):
         n = max(1, int(np.linalg.norm(b - a) / step))
         out.extend(a + (b - a) * (k / n) for k in range(1, n + 1))
     return np.asarray(out)

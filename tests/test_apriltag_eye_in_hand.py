@@ -46,7 +46,7 @@ def test_bundle_is_detected_in_eye_in_hand_frames_from_0_3_to_2_m():
                 pybullet.resetBasePositionAndOrientation(uav.body_id, p_uav.tolist(), q, physicsClientId=world.client_id)
                 frame = camera.measure()
                 corners, ids, _ = detector.detectMarkers(cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2GRAY))
-                seen = [(int(i), _side_px(c)) for c, i in zip(corners, [] if ids is None else ids.ravel())]
+                seen = [(int(i), _side_px(c)) for c, i in zip(corners, [] if ids is None else ids.ravel(), strict=True)]
                 seen = [(i, round(side, 1)) for i, side in seen if i in bundle.ids]
                 projected = {t.id: round(f * t.size / distance, 1) for t in bundle.tags}
                 report.append((distance, yaw, [i for i, _ in seen], [s for _, s in seen], projected))

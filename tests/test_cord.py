@@ -32,8 +32,8 @@ def _spacing(items: np.ndarray) -> np.ndarray:
 
 
 def test_paper_values_and_switching_rule():
-    assert PARAMS.L_C == pytest.approx(0.15)  # L_C ≈ 15 cm, §IV-A-1
-    assert PARAMS.L_S * PARAMS.N == pytest.approx(PARAMS.L_C)  # L_C = N·L_S
+    assert pytest.approx(0.15) == PARAMS.L_C  # L_C ≈ 15 cm, §IV-A-1
+    assert pytest.approx(PARAMS.L_C) == PARAMS.L_S * PARAMS.N  # L_C = N·L_S
     assert regression_order(ugv_speed=0.5, uav_speed=0.2) == 1  # UGV faster: linear
     assert regression_order(ugv_speed=0.2, uav_speed=0.5) == 2  # UAV more active: quadratic
 

@@ -92,7 +92,7 @@ def test_gust_peaks_match_the_setting_and_gusts_fill_half_the_time():
     speed = np.linalg.norm(gust, axis=1)
     on = speed > 0
     edges = np.flatnonzero(np.diff(on.astype(int)))
-    runs = [speed[a + 1 : b + 1] for a, b in zip(edges[on[edges + 1]], edges[~on[edges + 1]])]
+    runs = [speed[a + 1 : b + 1] for a, b in zip(edges[on[edges + 1]], edges[~on[edges + 1]], strict=True)]
     peaks = np.array([r.max() for r in runs])
     assert 150 < len(peaks) < 250  # one 2 s gust per ≈ 4 s
     assert peaks.min() > 2.99 and peaks.max() <= 3.0 + 1e-9  # every gust peaks at the 3 m/s setting
@@ -193,7 +193,7 @@ def test_video_latency_delays_readings_by_the_configured_time(tmp_path):
             ages.append((world.now, world.now - reading.stamp))
             lags.append(world.now - reading.data.position[0])  # the rig moves at 1 m/s: position tells capture time
             world.step(1 / 30)
-    for (now, age), lag in zip(ages, lags):
+    for (now, age), lag in zip(ages, lags, strict=True):
         if now < 1.0 - 1e-9:
             assert age == pytest.approx(0.0, abs=1e-9) and lag == pytest.approx(0.0, abs=1e-9)
         elif now > 1.25:

@@ -136,7 +136,7 @@ def test_an_occlusion_during_contact_cancels_and_asks_for_authorization_again(tm
     cancel = next(e for e in log.events_of("state_change") if e.get("phase") == "contact_cancelled")
     assert "marker lost" in cancel["why"] and occluded[0] < cancel["t"] < cancelled_at
     # the end effector dropped back to the tracking standoff to regain sight
-    t, gap, _ = zip(*gaps)
+    t, gap, _ = zip(*gaps, strict=True)
     t, gap = np.array(t), np.array(gap)
     at_cancel = gap[np.searchsorted(t, cancel["t"])]
     approach = next(e for e in log.events_of("state_change") if e.get("phase") == "approach")

@@ -1,6 +1,8 @@
 """Energy: LiPo battery, charger (Narváez §V-A: 12.6 V, 3.5 A, 2700 mAh), rotor power model,
 hover endurance and the battery drain of flying, stored and docked quadrotors."""
 
+import itertools
+
 import pytest
 
 from marsupial.world import World
@@ -20,7 +22,7 @@ def test_lipo_voltage_follows_the_soc_curve():
     assert empty.voltage == pytest.approx(9.9) and empty.empty
     socs = [i / 20 for i in range(21)]
     volts = [cell_voltage(s) for s in socs]
-    assert all(a < b for a, b in zip(volts, volts[1:]))
+    assert all(a < b for a, b in itertools.pairwise(volts))
     assert cell_voltage(-0.1) == cell_voltage(0.0) and cell_voltage(1.2) == cell_voltage(1.0)
 
 

@@ -270,6 +270,6 @@ def test_one_seed_is_deterministic_and_two_seeds_differ():
             return uav.pose()[0], uav.estimator.estimate().position, ugv.estimator.estimate().position, ugv.arm_encoders()
 
     a, b, c = flight(7), flight(7), flight(8)
-    for x, y in zip(a, b):
+    for x, y in zip(a, b, strict=True):
         assert np.array_equal(x, y)
     assert not np.allclose(a[1], c[1], atol=1e-4) and not np.allclose(a[2], c[2], atol=1e-4)

@@ -6,6 +6,7 @@ is read back from the MCAP log (poses at 5 Hz, the skill's phase events,
 the coverage metric).
 """
 
+import itertools
 import math
 
 import numpy as np
@@ -75,7 +76,7 @@ def test_uav_never_leaves_D_team_of_the_moving_carrier(log):
 
 def test_uav_stops_every_D_e_for_a_yaw_sweep(log):
     events = [e for e in log.events_of("state_change") if "phase" in e]
-    sweeps = [(e, after) for e, after in zip(events, events[1:]) if e["phase"] == "sweep"]
+    sweeps = [(e, after) for e, after in itertools.pairwise(events) if e["phase"] == "sweep"]
     assert len(sweeps) >= 5
     legs = [e["flown"] for e, _ in sweeps[1:]]  # exploration flight before each stop (the first is at the start)
     assert max(legs) <= D_E + 0.1  # a stop at the latest every D_e

@@ -7,6 +7,7 @@ cycle recycles the previous vertices still inside the new vicinity and
 valid, counted exactly; the graph is deterministic for a seed.
 """
 
+import itertools
 import math
 
 import numpy as np
@@ -20,6 +21,7 @@ from marsupial.skills.uav_docking.zones import ZoneMap, carrier_zones
 from marsupial.world.kinematics import ArmKinematics
 
 L_S = CordParams().L_S
+N_ITEMS = CordParams().N  # items in the cord
 Q_READY = np.array([0.0, -0.87, 1.98, 0.0, -1.11, 0.0])  # the carrier's "docking_ready" arm pose
 UP = np.eye(3)  # Part A pointing up, heading along M's x
 
@@ -35,7 +37,7 @@ def ik(kinematics):
         yield engine
 
 
-def _line_vicinity(start, heading=0.0, N=CordParams().N):
+def _line_vicinity(start, heading=0.0, N=N_ITEMS):
     d = np.array([math.cos(heading), math.sin(heading), 0.0])
     items = np.asarray(start, dtype=float) + L_S * np.arange(N)[:, None] * d
     return build_vicinity(Cord(items, 1 if N > 1 else 0, 0, np.zeros(2), False, d[:2]), L_S)
@@ -91,7 +93,7 @@ def test_tree_distances_follow_the_paths(kinematics, ik):
         for b in rng.choice(graph.n, 10, replace=False):
             path = graph.path(int(a), int(b))
             assert path[0] == a and path[-1] == b
-            assert all(graph.parent[u] == v or graph.parent[v] == u for u, v in zip(path, path[1:]))  # tree edges
+            assert all(graph.parent[u] == v or graph.parent[v] == u for u, v in itertools.pairwise(path))  # tree edges
             length = np.sum(np.linalg.norm(np.diff(graph.positions[path], axis=0), axis=1))
             assert distance[b] == pytest.approx(length, abs=1e-12)
 

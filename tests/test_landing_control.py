@@ -18,7 +18,7 @@ def test_fitted_gains_at_the_tracking_height_and_at_the_platform():
     assert gains.at(4.0) == pytest.approx((0.45, 0.1))  # tuned at the 4 m tracking height
     assert (gains.T_p, gains.T_i) == pytest.approx((0.1105, 0.1733), abs=1e-4)  # 1/m
     assert gains.at(-0.2) == gains.at(0.0)
-    kp, ki = zip(*(gains.at(h) for h in np.linspace(0.0, 4.0, 9)))
+    kp, ki = zip(*(gains.at(h) for h in np.linspace(0.0, 4.0, 9)), strict=True)
     assert np.all(np.diff(kp) < 0) and np.all(np.diff(ki) < 0)  # faster response closer to the platform
     printed = PIGains(T_p=0.002, T_i=0.002)  # the printed law with p_z in metres: Table 1
     assert printed.at(4.0) == pytest.approx((0.694, 0.198), abs=5e-4)

@@ -83,7 +83,7 @@ def _verdict(tick_hz: float, rms: float, seed: int = 0, touchdown: float = 0.27)
     test, k = TouchdownTest(), 0
     for tick in np.arange(0.0, 3.0, 1.0 / tick_hz):
         n = int(np.searchsorted(stamps, tick + 1e-9, side="right"))
-        new = [(float(s), f) for s, f in zip(stamps[k:n], forces[k:n])]
+        new = [(float(s), f) for s, f in zip(stamps[k:n], forces[k:n], strict=True)]
         k = n
         verdict = test.update(float(tick), 0.2, new)
         if verdict is not None:

@@ -79,7 +79,10 @@ def test_gripper_grasps_an_apparatus_lifts_it_and_the_tello_takes_off():
         across = _rotation(q_handle)[:, 1]  # fingers close across the handle, approach from above
         down = np.array([0.0, 0.0, -1.0])
         R_goal = R_arm.T @ np.c_[np.cross(across, down), across, down]
-        goal = lambda dz: R_arm.T @ (p_handle + [0.0, 0.0, dz] - p_arm)
+
+        def goal(dz):  # the handle point dz (m) above, in the arm base frame
+            return R_arm.T @ (p_handle + [0.0, 0.0, dz] - p_arm)
+
         g = goal(0.10)
         q_pre = _ik(kin, [math.atan2(g[1], g[0]), 0.3, 1.2, 0.0, 1.6, 0.0], g, R_goal)
         q_at = _ik(kin, q_pre, goal(0.0), R_goal)

@@ -319,7 +319,7 @@ def test_tag_bundle_is_detected_unmirrored_from_below(distance, yaw):
         assert ids is not None and 0 in ids.ravel()
         p_link, q_link = uav.link_pose(bundle.link)
         R_world_link = np.array(pybullet.getMatrixFromQuaternion(q_link)).reshape(3, 3)
-        for image_corners, tag_id in zip(corners, ids.ravel()):
+        for image_corners, tag_id in zip(corners, ids.ravel(), strict=True):
             p_world = bundle.tag(int(tag_id)).corners @ R_world_link.T + p_link
             p_cam = (p_world - frame.position) @ frame.rotation
             uv = p_cam @ frame.K.T

@@ -1,5 +1,6 @@
 """Scenes: every shipped scene loads with its labels, tags, zones and sizes; bad files fail clearly."""
 
+import itertools
 import math
 
 import numpy as np
@@ -99,7 +100,7 @@ def _probe_hits(world, points_xy, radius):
 
 def _along(path, step):
     out = [path[0]]
-    for a, b in zip(path[:-1], path[1:]):
+    for a, b in itertools.pairwise(path):
         n = max(1, math.ceil(np.linalg.norm(b - a) / step))
         out += [a + (b - a) * k / n for k in range(1, n + 1)]
     return np.array(out)

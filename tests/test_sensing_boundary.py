@@ -43,6 +43,8 @@ FORBIDDEN_MODULES = (
     "marsupial.world.estimation",
 )
 FORBIDDEN_ATTRIBUTES = frozenset({"world", "body_id", "client_id", "cid", "_robot", "bullet"})
+#: private names of the onboard ports' classes: their internals hold the truth the ports filter
+PRIVATE_PORT_PREFIXES = ("_Onboard", "_SensorPort", "_RunContext", "_DockingPort", "_LinkPort")
 TRUTH_CALLS = frozenset({"pose", "velocity", "link_pose", "mounted_frame", "optical_pose", "platform_pose",
                          "acceleration", "distance_to", "offset_to", "in_contact", "part_a_pose", "part_b_pose"})
 #: how long each shipped mission runs under the trap (s, simulated): long enough to reach its first skills
@@ -81,9 +83,10 @@ def boundary_findings(path: Path) -> list[str]:
             if any(module == bad or module.startswith(bad + ".") for bad in FORBIDDEN_MODULES):
                 found.append(f"{path.name}:{node.lineno}: imports {module}")
                 break
-        if isinstance(node, ast.Attribute):
-            if node.attr in FORBIDDEN_ATTRIBUTES or node.attr.startswith(("_Onboard", "_SensorPort", "_RunContext", "_DockingPort", "_LinkPort")):
-                found.append(f"{path.name}:{node.lineno}: uses .{node.attr}")
+        if isinstance(node, ast.Attribute) and (
+            node.attr in FORBIDDEN_ATTRIBUTES or node.attr.startswith(PRIVATE_PORT_PREFIXES)
+        ):
+            found.append(f"{path.name}:{node.lineno}: uses .{node.attr}")
         if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr in TRUTH_CALLS:
             found.append(f"{path.name}:{node.lineno}: calls .{node.func.attr}()")
     return found

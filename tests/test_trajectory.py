@@ -22,7 +22,7 @@ UPPER = -LOWER
 
 def _samples(trajectory: JointTrajectory, n: int = 800):
     t = np.linspace(0.0, trajectory.duration, n)
-    q, qd = zip(*(trajectory.sample(ti) for ti in t))
+    q, qd = zip(*(trajectory.sample(ti) for ti in t), strict=True)
     return t, np.array(q), np.array(qd)
 
 

@@ -77,7 +77,10 @@ def test_child_camera_sees_the_red_green_benchmark(distance):
         assert cols.max() - cols.min() + 1 == pytest.approx(0.136 * frame.K[0, 0] / p_optical[2], abs=3)
         # layout: red top-left and bottom-right, green top-right and bottom-left
         u, v = int(round(u_h)), int(round(v_h))
-        quarter = lambda r0, r1, c0, c1: np.bincount(colour[r0:r1, c0:c1].ravel(), minlength=3)[1:].argmax() + 1
+
+        def quarter(r0, r1, c0, c1):  # the dominant colour (1 red, 2 green) of an image window
+            return np.bincount(colour[r0:r1, c0:c1].ravel(), minlength=3)[1:].argmax() + 1
+
         h = max(3, (rows.max() - rows.min()) // 4)
         w = max(3, (cols.max() - cols.min()) // 4)
         assert quarter(v - h, v - 1, u - w, u - 1) == 1

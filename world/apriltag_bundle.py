@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import sys
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -95,7 +95,7 @@ class TagBundle:
         return cv2.aruco.getPredefinedDictionary(ARUCO_DICTIONARIES[self.family])
 
 
-@lru_cache(maxsize=None)
+@cache
 def load_tag_bundle(name: str = "bebop2_tag_bundle.yaml") -> TagBundle:
     """Read and check the bundle layout ``world/assets/<name>``.
 

@@ -12,6 +12,7 @@ as pybullet returns them.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import zlib
 from collections.abc import Callable
@@ -223,7 +224,5 @@ class World:
         self.close()
 
     def __del__(self) -> None:  # a forgotten world must not leak its client
-        try:
+        with contextlib.suppress(Exception):
             self.close()
-        except Exception:
-            pass

@@ -108,7 +108,7 @@ class FlightEstimator(Estimator):
         position, yaw: start pose (m, rad) in the navigation frame.
         vision_fixes: returns the newest :class:`~.external.VisionFix` message the team link delivered to
             this UAV (or ``None``); ``None``: no external fixes.
-        fix_gains: gains of their fusion (:class:`~.external.VisionFixGains`).
+        fix_gains: gains of their fusion (:class:`~.external.VisionFixGains`; its defaults if None).
 
     Attributes (read by the autopilot every update, plain floats):
         p, v: position (m) and velocity (m/s) in the navigation frame.
@@ -135,7 +135,7 @@ class FlightEstimator(Estimator):
         yaw: float,
         gains: FlightEstimatorGains = FlightEstimatorGains(),
         vision_fixes: Callable[[], Any] | None = None,
-        fix_gains: VisionFixGains = VisionFixGains(),
+        fix_gains: VisionFixGains | None = None,
     ):
         self.clock = world.clock
         self.imu, self.flow, self.sonar, self.barometer = imu, flow, sonar, barometer
@@ -148,7 +148,7 @@ class FlightEstimator(Estimator):
         self.v = [0.0, 0.0, 0.0]
         self.bias = [0.0, 0.0, 0.0]  # m/s², accelerometer bias estimate (navigation frame; z: vision fixes only)
         self.resets = 0
-        self.fixes = None if vision_fixes is None else VisionFixFusion(vision_fixes, fix_gains)
+        self.fixes = None if vision_fixes is None else VisionFixFusion(vision_fixes, fix_gains or VisionFixGains())
         self.shift = self.fixes.shift if self.fixes is not None else [0.0, 0.0, 0.0, 0.0]
         self.flow_rejected = 0
         self.height_valid = False

@@ -87,7 +87,7 @@ class ArmController:
 
     def reset(self, q: Sequence[float]) -> None:
         """Teleport the joints to ``q`` (rad) at rest and hold there (for setting up scenes)."""
-        for j, angle in zip(self.joints, q):
+        for j, angle in zip(self.joints, q, strict=True):
             pybullet.resetJointState(self.body_id, j, float(angle), 0.0, physicsClientId=self.cid)
         self.targets = np.clip(np.asarray(q, dtype=float), self.lower, self.upper)
         self._integral[:] = 0.0

@@ -203,7 +203,7 @@ class MobileManipulator(WheeledRobot):
             world,
             self.body_id,
             self.joint_indices,
-            list(zip(self.lower, self.upper)),
+            list(zip(self.lower, self.upper, strict=True)),
             max_speed=JOINT_SPEED_LIMIT,
             max_torque=self.max_torque,
         )

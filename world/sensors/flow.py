@@ -169,10 +169,13 @@ def _surface_velocity(
     """
     if body in static:
         return 0.0, 0.0
-    if link < 0 and pybullet.getNumJoints(body, physicsClientId=cid) == 0:
-        if pybullet.getDynamicsInfo(body, -1, physicsClientId=cid)[0] == 0.0:
-            static.add(body)
-            return 0.0, 0.0
+    if (
+        link < 0
+        and pybullet.getNumJoints(body, physicsClientId=cid) == 0
+        and pybullet.getDynamicsInfo(body, -1, physicsClientId=cid)[0] == 0.0
+    ):
+        static.add(body)
+        return 0.0, 0.0
     if link < 0:
         (vx, vy, _), (wx, wy, wz) = pybullet.getBaseVelocity(body, physicsClientId=cid)
         if not (vx or vy or wx or wy or wz):

@@ -101,7 +101,7 @@ class LidarScan:
 
 
 class Lidar(Sensor[LidarScan]):
-    """A 2-D LiDAR on ``robot``'s ``link`` at ``offset`` (m, link frame) with ``R_link_sensor``.
+    """A 2-D LiDAR on ``robot``'s ``link`` at ``offset`` (m, link frame) with ``R_link_sensor`` (identity if None).
 
     The scan plane is the sensor frame's x-y plane. ``config.noise_std`` is
     the range noise (m, 1σ; the LMS111 data sheet gives 12 mm); the spec's
@@ -116,7 +116,7 @@ class Lidar(Sensor[LidarScan]):
         config: SensorConfig,
         link: str | int = -1,
         offset: tuple[float, float, float] = (0.0, 0.0, 0.0),
-        R_link_sensor: np.ndarray = np.eye(3),
+        R_link_sensor: np.ndarray | None = None,
     ):
         super().__init__(robot.world, f"{robot.name}/{name}", config)
         self.robot = robot
@@ -124,7 +124,7 @@ class Lidar(Sensor[LidarScan]):
         self.beam_dropout = min(1.0, spec.beam_dropout * self.noise_scale)
         self.link = robot.link_index(link) if isinstance(link, str) else link
         self.offset = np.asarray(offset, dtype=float)
-        self.R_link_sensor = np.asarray(R_link_sensor, dtype=float)
+        self.R_link_sensor = np.eye(3) if R_link_sensor is None else np.asarray(R_link_sensor, dtype=float)
         self.angles = spec.angles()
         self.angles.flags.writeable = False  # shared by every scan
         a = self.angles.astype(float)
@@ -173,7 +173,7 @@ class Lidar(Sensor[LidarScan]):
                 reportHitNumber=hit_number,
                 physicsClientId=self.world.client_id,
             )
-            columns = list(zip(*results))
+            columns = list(zip(*results, strict=True))
             uids.extend(columns[0])
             fractions.extend(columns[2])
         return np.array(uids, dtype=np.int32), np.array(fractions, dtype=float)
