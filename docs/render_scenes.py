@@ -34,7 +34,10 @@ CLOSE_UP_SIZE = (234, 170)  # px
 
 @dataclass(frozen=True)
 class View:
-    """A camera orbiting ``target`` (m, world) at ``distance`` (m), ``yaw``/``pitch`` in degrees (pybullet's GUI convention)."""
+    """A camera orbiting ``target`` (m, world) at ``distance`` (m).
+
+    ``yaw``/``pitch`` in degrees (pybullet's GUI convention).
+    """
 
     target: tuple[float, float, float]
     distance: float
@@ -140,7 +143,9 @@ def _zone_outline(zone: Zone, z_floor: float) -> np.ndarray:
             p[along], p[2] = u, w
             corners.append(p)
         return np.asarray(corners)
-    return np.array([(lo[0], lo[1], z_floor), (hi[0], lo[1], z_floor), (hi[0], hi[1], z_floor), (lo[0], hi[1], z_floor)])
+    return np.array(
+        [(lo[0], lo[1], z_floor), (hi[0], lo[1], z_floor), (hi[0], hi[1], z_floor), (lo[0], hi[1], z_floor)]
+    )
 
 
 def _annotate(

@@ -56,7 +56,8 @@ def body_pose(estimate: Any, t: float | None = None) -> tuple[np.ndarray, np.nda
         return p, R
     yaw = float((R @ np.asarray(estimate.angular_velocity, dtype=float))[2]) * dt  # body rates → about nav z
     c, s = math.cos(yaw), math.sin(yaw)
-    return p + np.asarray(estimate.velocity, dtype=float) * dt, np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ R
+    R_yaw = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return p + np.asarray(estimate.velocity, dtype=float) * dt, R_yaw @ R
 
 
 class EstimateHistory:
@@ -90,8 +91,13 @@ class EstimateHistory:
         return body_pose(chosen, t)
 
 
-def in_nav_frame(body: tuple[np.ndarray, np.ndarray], mount: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-    """Position (m) and rotation in the navigation frame of a frame mounted at ``mount`` (body frame) on a body at ``body``."""
+def in_nav_frame(
+    body: tuple[np.ndarray, np.ndarray], mount: tuple[np.ndarray, np.ndarray]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Position (m) and rotation in the navigation frame of a frame mounted on a body.
+
+    ``body`` is the body's pose in the navigation frame, ``mount`` the frame's pose in the body frame.
+    """
     p_nav_body, R_nav_body = body
     return p_nav_body + R_nav_body @ mount[0], R_nav_body @ mount[1]
 

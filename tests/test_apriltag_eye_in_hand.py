@@ -43,7 +43,9 @@ def test_bundle_is_detected_in_eye_in_hand_frames_from_0_3_to_2_m():
                 q = pybullet.getQuaternionFromEuler([0.0, 0.0, yaw])
                 R = np.array(pybullet.getMatrixFromQuaternion(q)).reshape(3, 3)
                 p_uav = p_cam + distance * R_world_optical[:, 2] - R @ plate_center
-                pybullet.resetBasePositionAndOrientation(uav.body_id, p_uav.tolist(), q, physicsClientId=world.client_id)
+                pybullet.resetBasePositionAndOrientation(
+                    uav.body_id, p_uav.tolist(), q, physicsClientId=world.client_id
+                )
                 frame = camera.measure()
                 corners, ids, _ = detector.detectMarkers(cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2GRAY))
                 seen = [(int(i), _side_px(c)) for c, i in zip(corners, [] if ids is None else ids.ravel(), strict=True)]

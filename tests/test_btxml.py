@@ -68,7 +68,10 @@ def small_tree():
                     c.Parallel(
                         "both",
                         policy=ParallelPolicy.SuccessOnOne(),
-                        children=[d.Repeat("again", b.Running("spin"), num_success=-1), d.Inverter("not", b.Failure("no"))],
+                        children=[
+                            d.Repeat("again", b.Running("spin"), num_success=-1),
+                            d.Inverter("not", b.Failure("no")),
+                        ],
                     ),
                 ],
             ),
@@ -109,11 +112,17 @@ def test_tree_nodes_model_declares_each_custom_node_once():
     doc = ET.fromstring(to_btcpp_xml(small_tree()))
     model = doc.find("TreeNodesModel")
     declared = {(e.tag, e.get("ID")) for e in model}
-    assert declared == {("Action", "DriveTo"), ("Condition", "BatteryLow"), ("Decorator", "Until"), ("Action", "Running")}
+    assert declared == {
+        ("Action", "DriveTo"),
+        ("Condition", "BatteryLow"),
+        ("Decorator", "Until"),
+        ("Action", "Running"),
+    }
     assert len(list(model)) == 4  # DriveTo is used twice, declared once
     ports = {p.get("name"): p for p in model.find("Action[@ID='DriveTo']")}
     assert set(ports) == {"goal", "speed", "label", "robot"}
-    assert (ports["speed"].get("type"), ports["speed"].get("default"), ports["speed"].text) == ("double", "0.5", "cruise speed (m/s)")
+    speed = ports["speed"]
+    assert (speed.get("type"), speed.get("default"), speed.text) == ("double", "0.5", "cruise speed (m/s)")
     assert ports["label"].get("default") is None and ports["goal"].get("default") is None
 
 

@@ -21,13 +21,17 @@ def _camera(world, position, rpy=(0.0, 0.0, 0.0), R_link_optical=OPTICAL_FORWARD
         0.0, -1, -1, position, pybullet.getQuaternionFromEuler(rpy), physicsClientId=world.client_id
     )
     config = SensorConfig(rate_hz=30.0, noise_std=options.pop("noise_std", 0.0))
-    return Camera(rig, "eye", Intrinsics(*size, fov), config, R_link_optical=R_link_optical, segmentation=True, **options)
+    return Camera(
+        rig, "eye", Intrinsics(*size, fov), config, R_link_optical=R_link_optical, segmentation=True, **options
+    )
 
 
 def _box(world, half_extents, position, rgba=(1.0, 0.0, 0.0, 1.0)):
     cid = world.client_id
     collision = pybullet.createCollisionShape(pybullet.GEOM_BOX, halfExtents=half_extents, physicsClientId=cid)
-    visual = pybullet.createVisualShape(pybullet.GEOM_BOX, halfExtents=half_extents, rgbaColor=rgba, physicsClientId=cid)
+    visual = pybullet.createVisualShape(
+        pybullet.GEOM_BOX, halfExtents=half_extents, rgbaColor=rgba, physicsClientId=cid
+    )
     return pybullet.createMultiBody(0.0, collision, visual, position, physicsClientId=cid)
 
 
@@ -104,7 +108,9 @@ def test_noise_is_seeded():
     def frame(seed):
         with World(seed=seed) as world:
             _box(world, [0.3, 0.3, 0.5], [0, 0, 0.5])
-            return _camera(world, [0, 0, 3.0], R_link_optical=OPTICAL_DOWN, noise_std=8.0, depth_noise_per_m=0.01).measure()
+            return _camera(
+                world, [0, 0, 3.0], R_link_optical=OPTICAL_DOWN, noise_std=8.0, depth_noise_per_m=0.01
+            ).measure()
 
     a, b, c = frame(3), frame(3), frame(4)
     np.testing.assert_array_equal(a.rgb, b.rgb)

@@ -47,7 +47,11 @@ BAD_INPUTS = {
     "malformed_yaml": ("mission: x\ntree: {sequence: [{skill: wait}\n", 3, "x.yaml:"),
     "unknown_key": (GOOD.replace("tree:", "treee:"), 4, "did you mean 'tree'?"),
     "unknown_skill": (GOOD.replace("skill: hover", "skill: hovr"), 6, "did you mean 'hover'?"),
-    "wrong_parameter_type": (GOOD.replace("seconds: 0.5", "seconds: half"), 6, "params.seconds: invalid value 'half'; expected a number"),
+    "wrong_parameter_type": (
+        GOOD.replace("seconds: 0.5", "seconds: half"),
+        6,
+        "params.seconds: invalid value 'half'; expected a number",
+    ),
     "subtree_cycle": ("mission: x\ntree: {subtree: a.yaml}\n", 2, "cycle"),
     "missing_subtree_file": ("mission: x\ntree: {subtree: nowhere.yaml}\n", 2, "nowhere"),
 }
@@ -116,7 +120,9 @@ def tamper(source, target):
             if schema.id not in schemas:
                 schemas[schema.id] = writer.register_schema(schema.name, schema.encoding, schema.data)
             if channel.id not in channels:
-                channels[channel.id] = writer.register_channel(channel.topic, channel.message_encoding, schemas[schema.id])
+                channels[channel.id] = writer.register_channel(
+                    channel.topic, channel.message_encoding, schemas[schema.id]
+                )
             data = message.data
             payload = json.loads(data) if channel.topic == "/events" else None
             if payload and payload["kind"] == "outcome" and not changed:
@@ -144,14 +150,27 @@ def test_mission_failure_exits_1(tmp_path):
     assert result.exit_code == 1
 
 
-@pytest.mark.parametrize("signum, code, outcome", [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated")])
+@pytest.mark.parametrize(
+    "signum, code, outcome", [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated")]
+)
 def test_a_signal_leaves_a_readable_log(tmp_path, signum, code, outcome):
     mission = write(tmp_path, "long.yaml", GOOD.replace("seconds: 0.5", "seconds: 100000"))
     log = tmp_path / "run.mcap"
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     process = subprocess.Popen(
-        [sys.executable, "-c", "from marsupial.trees.cli import main; main()", "run", str(mission), "--log", str(log), "-q"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env,
+        [
+            sys.executable,
+            "-c",
+            "from marsupial.trees.cli import main; main()",
+            "run",
+            str(mission),
+            "--log",
+            str(log),
+            "-q",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env=env,
     )
     deadline = time.monotonic() + 60
     while not (log.exists() and log.stat().st_size > 0) and time.monotonic() < deadline:

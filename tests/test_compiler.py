@@ -33,7 +33,9 @@ def run(tmp_path, tree, team="", extra="", log=True, **kwargs):
 
 def outcomes(log, status=None):
     """(t, node, status) of every skill outcome event."""
-    return [(round(e["t"], 3), e["node"], e["status"]) for e in log.events_of("outcome") if status in (None, e["status"])]
+    return [
+        (round(e["t"], 3), e["node"], e["status"]) for e in log.events_of("outcome") if status in (None, e["status"])
+    ]
 
 
 # ---------------------------------------------------------------- node types
@@ -186,7 +188,8 @@ def test_the_demo_mission_flies_and_lands(tmp_path):
     log = read_log(tmp_path / "run.mcap")
     _, estimate = log.poses("uav", estimate=True)
     _, truth = log.poses("uav")
-    assert estimate[-1] == pytest.approx([2.0, 2.0, 0.15], abs=0.1)  # where the UAV believes it landed (goto's tolerance)
+    # where the UAV believes it landed (goto's tolerance)
+    assert estimate[-1] == pytest.approx([2.0, 2.0, 0.15], abs=0.1)
     assert truth[-1, 2] == pytest.approx(0.09, abs=0.02)  # on the floor
     assert np.linalg.norm(truth[-1, :2] - [2.0, 2.0]) < 0.35  # where it is: optical-flow drift over 13 s of flight
 

@@ -1,4 +1,7 @@
-"""Built-in conditions read what the robots sense: the battery monitor, the LiDAR scan, the estimate against the declared plan."""
+"""Built-in conditions read what the robots sense.
+
+The battery monitor, the LiDAR scan, the estimate against the declared plan.
+"""
 
 import math
 
@@ -30,7 +33,8 @@ def test_battery_below_reads_the_whole_percent_gauge():
 
 def test_obstacle_ahead_sees_a_post_in_the_lidar_scan():
     with World(scene="open_field", seed=1) as world:  # marker post of radius 0.15 m at (60, 60)
-        world.add_robot("mobile_manipulator", "carrier", pose=[58.9, 60, 0])  # front 0.23 m ahead: post 0.72 m beyond it
+        # front 0.23 m ahead: post 0.72 m beyond it
+        world.add_robot("mobile_manipulator", "carrier", pose=[58.9, 60, 0])
         harness = Harness(world)
         world.step(0.1)
         assert holds(harness, ObstacleAhead, "carrier", distance=1.0)

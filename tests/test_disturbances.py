@@ -43,27 +43,47 @@ class _Rig(Robot):
 
 def _tag_quad(world, tmp_path, side=0.3):
     """A visual shape: an upward-facing square of ``side`` m textured with AprilTag 36h11 #TAG_ID."""
-    image = cv2.copyMakeBorder(cv2.aruco.generateImageMarker(TAGS, TAG_ID, 200), 50, 50, 50, 50, cv2.BORDER_CONSTANT, value=255)
+    image = cv2.copyMakeBorder(
+        cv2.aruco.generateImageMarker(TAGS, TAG_ID, 200), 50, 50, 50, 50, cv2.BORDER_CONSTANT, value=255
+    )
     cv2.imwrite(str(tmp_path / "tag.png"), image)
     h = side / 2
     (tmp_path / "tag.obj").write_text(
         f"v {-h} {-h} 0\nv {h} {-h} 0\nv {h} {h} 0\nv {-h} {h} 0\n"
         "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n"
     )
-    return pybullet.createVisualShape(pybullet.GEOM_MESH, fileName=str(tmp_path / "tag.obj"), physicsClientId=world.client_id)
+    return pybullet.createVisualShape(
+        pybullet.GEOM_MESH, fileName=str(tmp_path / "tag.obj"), physicsClientId=world.client_id
+    )
 
 
 def _marker_scene(world, tmp_path, rate_hz=30.0, size=(320, 240)):
     """A textured tag on robot 'uav' (link 'link0') 1 m under a downward camera 'rig/eye'."""
     uav = _Rig(world, "uav", [0, 0, 0.5], [_tag_quad(world, tmp_path)])
-    pybullet.changeVisualShape(uav.body_id, 0, textureUniqueId=pybullet.loadTexture(str(tmp_path / "tag.png"), physicsClientId=world.client_id), physicsClientId=world.client_id)
+    pybullet.changeVisualShape(
+        uav.body_id,
+        0,
+        textureUniqueId=pybullet.loadTexture(str(tmp_path / "tag.png"), physicsClientId=world.client_id),
+        physicsClientId=world.client_id,
+    )
     rig = _Rig(world, "rig", [0, 0, 1.5])
-    camera = rig.add_sensor(Camera(rig, "eye", Intrinsics(*size, 60.0), SensorConfig(rate_hz=rate_hz), R_link_optical=OPTICAL_DOWN, segmentation=True))
+    camera = rig.add_sensor(
+        Camera(
+            rig,
+            "eye",
+            Intrinsics(*size, 60.0),
+            SensorConfig(rate_hz=rate_hz),
+            R_link_optical=OPTICAL_DOWN,
+            segmentation=True,
+        )
+    )
     return uav, camera
 
 
 def _tag_seen(camera):
-    corners, ids, _ = cv2.aruco.ArucoDetector(TAGS).detectMarkers(cv2.cvtColor(camera.measure().rgb, cv2.COLOR_RGB2GRAY))
+    corners, ids, _ = cv2.aruco.ArucoDetector(TAGS).detectMarkers(
+        cv2.cvtColor(camera.measure().rgb, cv2.COLOR_RGB2GRAY)
+    )
     return ids is not None and TAG_ID in ids.ravel()
 
 
@@ -86,7 +106,9 @@ def test_gusts_are_a_deterministic_function_of_seed_and_time():
 
 def test_gust_peaks_match_the_setting_and_gusts_fill_half_the_time():
     with World(seed=2) as world:
-        wind = GustyWind(world, steady=(1.0, -0.5, 0.0), gust=3.0, gust_period_s=2.0, gust_gap_s=2.0, gust_elevation_deg=10.0)
+        wind = GustyWind(
+            world, steady=(1.0, -0.5, 0.0), gust=3.0, gust_period_s=2.0, gust_gap_s=2.0, gust_elevation_deg=10.0
+        )
         times = np.arange(0.0, 800.0, 0.02)
         gust = np.array([wind.velocity(t, np.array([5.0, 0.0, 1.0])) for t in times]) - [1.0, -0.5, 0.0]
     speed = np.linalg.norm(gust, axis=1)
@@ -115,7 +137,9 @@ def test_apply_disturbances_installs_the_wind():
 def test_occlusion_hides_a_textured_marker_during_its_window(tmp_path):
     with World() as world:
         _, camera = _marker_scene(world, tmp_path)
-        schedule = apply_disturbances(world, {"occlusion": [{"robot": "uav", "link": "link0", "start": 0.5, "duration": 0.5}]})
+        schedule = apply_disturbances(
+            world, {"occlusion": [{"robot": "uav", "link": "link0", "start": 0.5, "duration": 0.5}]}
+        )
         seen = {}
         for t in (0.25, 0.5, 0.75, 0.99, 1.0, 1.25):
             world.step(t - world.now)
@@ -164,7 +188,9 @@ def test_random_occlusions_follow_their_rate_and_seed(tmp_path):
 def test_frame_drops_lose_the_configured_fraction_of_due_frames(tmp_path):
     with World(seed=11) as world:
         _, camera = _marker_scene(world, tmp_path, rate_hz=30.0, size=(16, 12))
-        apply_disturbances(world, {"frame_drops": {"camera": "rig/eye", "probability": 0.1, "start": 5.0, "duration": 100.0}})
+        apply_disturbances(
+            world, {"frame_drops": {"camera": "rig/eye", "probability": 0.1, "start": 5.0, "duration": 100.0}}
+        )
         counts = {}
         for phase, until in (("before", 5.0), ("during", 105.0), ("after", 110.0)):
             taken0, dropped0 = camera.samples_taken, camera.samples_dropped
@@ -188,7 +214,9 @@ def test_video_latency_delays_readings_by_the_configured_time(tmp_path):
         apply_disturbances(world, {"video_latency": {"camera": "rig/eye", "seconds": 0.2, "start": 1.0}})
         ages, lags = [], []
         while world.now < 3.0:
-            pybullet.resetBasePositionAndOrientation(rig.body_id, [world.now, 0, 1.5], [0, 0, 0, 1], physicsClientId=world.client_id)
+            pybullet.resetBasePositionAndOrientation(
+                rig.body_id, [world.now, 0, 1.5], [0, 0, 0, 1], physicsClientId=world.client_id
+            )
             reading = camera.read()
             ages.append((world.now, world.now - reading.stamp))
             lags.append(world.now - reading.data.position[0])  # the rig moves at 1 m/s: position tells capture time
@@ -204,16 +232,28 @@ def test_video_latency_delays_readings_by_the_configured_time(tmp_path):
 @pytest.mark.parametrize(
     ("spec", "message"),
     [
-        ({"wind": {"stedy": [1, 0, 0]}}, r"world.wind: unknown key\(s\) \['stedy'\]; expected some of \['steady', 'gust'"),
+        (
+            {"wind": {"stedy": [1, 0, 0]}},
+            r"world.wind: unknown key\(s\) \['stedy'\]; expected some of \['steady', 'gust'",
+        ),
         ({"gusts": 3}, r"world: unknown key\(s\) \['gusts'\]; expected some of \['wind', 'occlusion'"),
         ({"wind": {"gust": "strong"}}, r"world.wind.gust: expected a number, got str 'strong'"),
         ({"wind": {"steady": [1, 0]}}, r"world.wind.steady: expected \[vx, vy, vz\]"),
-        ({"occlusion": [{"robot": "uav", "start": "ten"}]}, r"world.occlusion\[0\].start: expected a number, got str 'ten'"),
+        (
+            {"occlusion": [{"robot": "uav", "start": "ten"}]},
+            r"world.occlusion\[0\].start: expected a number, got str 'ten'",
+        ),
         ({"occlusion": {"link": "link0"}}, r"world.occlusion: missing key\(s\) \['robot'\]"),
         ({"occlusion": "uav"}, r"world.occlusion: expected a mapping or a list of mappings, got str"),
-        ({"occlusion": {"robot": "uav", "rate_hz": 0.1}}, r"world.occlusion: random windows \(rate_hz\) need a duration"),
+        (
+            {"occlusion": {"robot": "uav", "rate_hz": 0.1}},
+            r"world.occlusion: random windows \(rate_hz\) need a duration",
+        ),
         ({"occlusion": {"robot": "uav", "stop": 5}}, r"world.occlusion.stop: only random windows"),
-        ({"frame_drops": {"camera": "rig/eye", "probability": 1.5}}, r"world.frame_drops.probability: expected a number within \[0.0, 1.0\], got 1.5"),
+        (
+            {"frame_drops": {"camera": "rig/eye", "probability": 1.5}},
+            r"world.frame_drops.probability: expected a number within \[0.0, 1.0\], got 1.5",
+        ),
         ({"video_latency": {"camera": "rig/eye", "seconds": 0.2, "every": 3}}, r"unknown key\(s\) \['every'\]"),
         ({"video_latency": {"camera": "eye", "seconds": 0.2}}, r"a camera is named 'robot/sensor'"),
     ],

@@ -1,4 +1,6 @@
-"""track and contact (Narváez §IV-A-B, eq. 15, §IV-C): a docking end to end, the log-law approach, cancellation, low battery.
+"""track and contact (Narváez §IV-A-B, eq. 15, §IV-C).
+
+A docking end to end, the log-law approach, cancellation, low battery.
 
 Short missions and harness runs against the real world (eye-in-hand camera
 at 320×240, tree at 10 Hz, as in the USAR mission); results are read back
@@ -39,7 +41,10 @@ team:
 
 def mission_file(tmp_path, name, uav, tree, until=40):
     """A mission file in ``tmp_path``: the carrier above, the UAV ``uav`` (team entry), the tree."""
-    text = f"mission: {name}\nworld: {{scene: null, seed: 1}}\n{TEAM}  uav: {uav}\nrun: {{tick_hz: 10, until: {until}}}\ntree:\n"
+    text = (
+        f"mission: {name}\nworld: {{scene: null, seed: 1}}\n{TEAM}  uav: {uav}\n"
+        f"run: {{tick_hz: 10, until: {until}}}\ntree:\n"
+    )
     path = tmp_path / f"{name}.yaml"
     path.write_text(text + textwrap.indent(tree, "  "))
     return path
@@ -154,7 +159,9 @@ until:
     - do: {skill: explore, robot: uav, params: {target: null}}
 condition: {stored: carrier, robot: uav}
 """
-    path = mission_file(tmp_path, "low_battery", "{robot: bebop2, pose: [0.8, 0.6, 1.5, 0.0], options: {battery_soc: 0.2005}}", tree)
+    path = mission_file(
+        tmp_path, "low_battery", "{robot: bebop2, pose: [0.8, 0.6, 1.5, 0.0], options: {battery_soc: 0.2005}}", tree
+    )
     result = run_mission(path, log_path=tmp_path / "battery.mcap", progress=False)
     assert result.outcome == "success"
     log = read_log(tmp_path / "battery.mcap")
@@ -170,8 +177,10 @@ def test_the_sonar_cone_is_a_prohibited_zone_around_the_beam_only():
     T_M_S = np.eye(4)
     T_M_S[:3, 3] = [0.3, 0.0, 1.0]  # a range finder 1 m up, looking down (beam along -z)
     sonar_cone_zones(zones, T_M_S, math.radians(15.0), 1.0)
-    beam = np.array([[0.3, 0.0, 0.9], [0.3 + 0.8 * math.tan(math.radians(15.0)) * 0.9, 0.0, 0.2]])  # on the axis, inside the edge
-    outside = np.array([[0.3 + 0.15, 0.0, 0.9], [0.3, 0.0, 1.05], [0.3 + 0.4, 0.0, 0.2]])  # beside it near the top, above, wide
+    # on the axis, inside the edge
+    beam = np.array([[0.3, 0.0, 0.9], [0.3 + 0.8 * math.tan(math.radians(15.0)) * 0.9, 0.0, 0.2]])
+    # beside it near the top, above, wide
+    outside = np.array([[0.3 + 0.15, 0.0, 0.9], [0.3, 0.0, 1.05], [0.3 + 0.4, 0.0, 0.2]])
     assert not zones.points_free(beam).any()
     assert zones.points_free(outside).all()
 
@@ -208,7 +217,9 @@ def test_relative_pose_filter_carries_the_frame_drift_and_rejects_outliers():
     close = expected.copy()
     close[:3, 3] += [0.02, 0.0, 0.0]
     assert f.measure(close, T_N_M_later, T_O_Q_later)
-    np.testing.assert_allclose(f.predict(T_N_M_later, T_O_Q_later)[:3, 3], expected[:3, 3] + [0.01, 0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(
+        f.predict(T_N_M_later, T_O_Q_later)[:3, 3], expected[:3, 3] + [0.01, 0.0, 0.0], atol=1e-12
+    )
     for _ in range(3):  # the same far pose again and again: the prediction itself was wrong, restart on it
         assert not f.measure(wrong, T_N_M_later, T_O_Q_later)
     assert f.measure(wrong, T_N_M_later, T_O_Q_later)

@@ -267,7 +267,12 @@ def test_one_seed_is_deterministic_and_two_seeds_differ():
             uav.command_velocity(1.0, 0.5, 0.0, 0.2)
             ugv.drive(0.5, 0.1)
             world.step(3.0)
-            return uav.pose()[0], uav.estimator.estimate().position, ugv.estimator.estimate().position, ugv.arm_encoders()
+            return (
+                uav.pose()[0],
+                uav.estimator.estimate().position,
+                ugv.estimator.estimate().position,
+                ugv.arm_encoders(),
+            )
 
     a, b, c = flight(7), flight(7), flight(8)
     for x, y in zip(a, b, strict=True):

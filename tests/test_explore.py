@@ -1,4 +1,6 @@
-"""explore (Narváez §V-A): the UAV surveys the rooms around the carrier, stops every D_e for a yaw sweep, never leaves D_team.
+"""explore (Narváez §V-A): the UAV surveys the rooms around the carrier.
+
+It stops every D_e for a yaw sweep and never leaves D_team.
 
 One mission in ``usar_building``: the carrier follows the operator's guide
 path at 0.3 m/s (``navigate``) while the UAV explores around it; everything
@@ -132,7 +134,8 @@ def test_walls_of_the_plan_hide_what_is_behind_them_from_the_coverage():
     bearings = view_bearings(frame.K, frame.rgb.shape[1], R)
     assert np.ptp(bearings) == pytest.approx(math.radians(80), abs=math.radians(8))  # the Bebop's horizontal field
     ranges = plan_ranges(grid, position[:2], bearings, 6.0)
-    assert np.median(ranges) == pytest.approx(1.5 - 0.1 - 0.128, abs=0.25)  # the wall's face (0.1 m half thickness; lens 0.128 m ahead)
+    # the wall's face (0.1 m half thickness; lens 0.128 m ahead)
+    assert np.median(ranges) == pytest.approx(1.5 - 0.1 - 0.128, abs=0.25)
     seen = visible_cells(grid, position[:2], bearings, ranges, 6.0)
     x, y = grid.centers()
     assert seen[(np.abs(x + 7.2) < 0.5) & (y > 3.0) & (y < 3.8)].all()  # the hall up to the wall
@@ -148,12 +151,14 @@ def test_next_goal_prefers_the_nearer_unsurveyed_area():
     distance = np.where(grid.area, np.abs(x + 8.0), np.inf)  # path lengths from x = -8
     goal = next_goal(grid, distance, unseen, 2.0, 4.0, np.zeros(grid.shape, dtype=bool))
     assert goal is not None and -12.5 < grid.point(goal)[0] < -9.5
-    assert next_goal(grid, distance, np.zeros(grid.shape, dtype=bool), 2.0, 4.0, np.zeros(grid.shape, dtype=bool)) is None
+    none = np.zeros(grid.shape, dtype=bool)
+    assert next_goal(grid, distance, none, 2.0, 4.0, none) is None
 
 
 def test_explore_finds_the_target_and_succeeds(tmp_path):
     with World(scene="usar_building", seed=0) as world:
-        world.add_robot("mobile_manipulator", "carrier", pose=[11.5, -1.8, -math.pi / 2])  # in the lobby, not under the sonar
+        # in the lobby, not under the sonar
+        world.add_robot("mobile_manipulator", "carrier", pose=[11.5, -1.8, -math.pi / 2])
         world.add_robot("bebop2", "uav", pose=[11.5, -3.6, 1.5, 0.0])  # in door_6, the target room south of it
         harness = Harness(world, log_path=tmp_path / "run.mcap")
         explore = harness.node(Explore, "uav")
@@ -173,8 +178,10 @@ def test_explore_finds_the_target_and_succeeds(tmp_path):
 
 def test_target_is_detected_by_its_colour_only_where_the_camera_sees_it():
     with World(scene="usar_building", seed=0) as world:
-        outside = world.add_robot("bebop2", "outside", pose=[12.9, -1.5, 1.5, -math.pi / 2])  # in the lobby, facing the target
-        inside = world.add_robot("bebop2", "inside", pose=[12.9, -4.0, 1.5, -math.pi / 2])  # in the target room, 3.6 m away
+        # in the lobby, facing the target
+        outside = world.add_robot("bebop2", "outside", pose=[12.9, -1.5, 1.5, -math.pi / 2])
+        # in the target room, 3.6 m away
+        inside = world.add_robot("bebop2", "inside", pose=[12.9, -4.0, 1.5, -math.pi / 2])
         frame, _, _ = front_camera(world, outside)  # the room's north wall (y = -3) between them
         assert detect_colour(frame.rgb, (255, 120, 20)) is None
         frame, position, R = front_camera(world, inside)

@@ -64,7 +64,9 @@ def test_deep_nesting_is_refused_with_a_location(tmp_path):
         load_mission(mission_file(tmp_path, "tree: " + "[" * 5000 + "]" * 5000, "deeper.yaml"))
 
 
-@pytest.mark.parametrize(("value", "expected"), [("480", "expected a value <= 240"), ("1e-300", "expected a value >= 0.01")])
+@pytest.mark.parametrize(
+    ("value", "expected"), [("480", "expected a value <= 240"), ("1e-300", "expected a value >= 0.01")]
+)
 def test_tick_rate_is_bounded(tmp_path, value, expected):
     path = mission_file(tmp_path, BASE.replace("tick_hz: 10", f"tick_hz: {value}"))
     assert_bad_input(marsupial("tree", str(path)), "m.yaml:4:", "run.tick_hz", expected)
@@ -76,7 +78,9 @@ def test_negative_seeds_are_refused_everywhere(tmp_path):
     good = mission_file(tmp_path, BASE, "good.yaml")
     assert_bad_input(marsupial("run", str(good), "--set", "world.seed=-3"), "value set by --set world.seed=-3")
     assert_bad_input(marsupial("run", str(good), "--seed", "-3"), "'--seed': -3 is not in the range x>=0")
-    assert_bad_input(marsupial("campaign", str(good), "--trials", "1", "--seed", "-1", "--out", str(tmp_path / "c")), "--seed")
+    assert_bad_input(
+        marsupial("campaign", str(good), "--trials", "1", "--seed", "-1", "--out", str(tmp_path / "c")), "--seed"
+    )
     with pytest.raises(MissionError, match="seed -1 is not a seed; expected an integer >= 0"):
         run_mission(good, seed=-1, progress=False)
 
@@ -125,10 +129,22 @@ def test_a_subtree_outside_the_mission_folder_is_not_read(tmp_path):
     tree = "tree:\n  subtree: ../secret.yaml\n"
     path = mission_file(inner, BASE.replace("tree:\n  skill: wait\n  params: {seconds: 0.5}\n", tree))
     assert_bad_input(marsupial("tree", str(path)), "subtree '../secret.yaml' is outside the mission's folder")
-    etc = mission_file(inner, BASE.replace("tree:\n  skill: wait\n  params: {seconds: 0.5}\n", "tree: {subtree: ../../../../../../etc/passwd}\n"), "etc.yaml")
+    etc = mission_file(
+        inner,
+        BASE.replace(
+            "tree:\n  skill: wait\n  params: {seconds: 0.5}\n", "tree: {subtree: ../../../../../../etc/passwd}\n"
+        ),
+        "etc.yaml",
+    )
     assert_bad_input(marsupial("tree", str(etc)), "outside the mission's folder")
     env = {**os.environ, "MARSUPIAL_SUBTREE_PATH": str(tmp_path)}
-    allowed = subprocess.run([sys.executable, "-m", "marsupial.trees.cli", "tree", str(path)], capture_output=True, text=True, env=env, timeout=300)
+    allowed = subprocess.run(
+        [sys.executable, "-m", "marsupial.trees.cli", "tree", str(path)],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=300,
+    )
     assert allowed.returncode == 0, allowed.stderr
 
 
@@ -162,7 +178,10 @@ class BadStatus(Skill):
 
 
 def test_a_tick_that_returns_no_status_ends_the_run_with_a_named_error(tmp_path):
-    text = BASE.replace("tree:\n  skill: wait\n  params: {seconds: 0.5}\n", "plugins: {wait: test_hostile_input:BadStatus}\ntree: {skill: wait, name: buggy}\n")
+    text = BASE.replace(
+        "tree:\n  skill: wait\n  params: {seconds: 0.5}\n",
+        "plugins: {wait: test_hostile_input:BadStatus}\ntree: {skill: wait, name: buggy}\n",
+    )
     result = run_mission(mission_file(tmp_path, text), progress=False, log_path=tmp_path / "run.mcap")
     assert result.outcome == "error"
     assert "BadStatus 'buggy' returned 3 from its tick; expected a py_trees Status" in result.message
@@ -176,7 +195,9 @@ def test_a_tick_that_returns_no_status_ends_the_run_with_a_named_error(tmp_path)
 def test_verify_works_from_the_log_alone(tmp_path):
     folder = tmp_path / "project"
     (folder / "subtrees").mkdir(parents=True)
-    (folder / "subtrees" / "pause.yaml").write_text("subtree: pause\nparams: {s: 0.3}\ntree: {skill: wait, params: {seconds: '${s}'}}\n")
+    (folder / "subtrees" / "pause.yaml").write_text(
+        "subtree: pause\nparams: {s: 0.3}\ntree: {skill: wait, params: {seconds: '${s}'}}\n"
+    )
     tree = "tree:\n  sequence:\n    - {subtree: pause, params: {s: 0.2}}\n    - {skill: wait, params: {seconds: 0.1}}\n"
     path = mission_file(folder, BASE.replace("tree:\n  skill: wait\n  params: {seconds: 0.5}\n", tree))
     log = tmp_path / "run.mcap"

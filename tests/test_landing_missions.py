@@ -1,4 +1,7 @@
-"""The landing missions and the landing_cycle subtree: they load and compile, --set reaches every number, bad values exit 2."""
+"""The landing missions and the landing_cycle subtree.
+
+They load and compile, --set reaches every number, bad values exit 2.
+"""
 
 import pytest
 from click.testing import CliRunner
@@ -32,7 +35,8 @@ def test_missions_load_and_compile_with_the_five_state_cycle(name):
     nodes = _nodes(name)
     assert {Takeoff, Follow, Land, Relocalize, DrivePattern, PlatformLost, Landed, FlightTime} <= set(nodes)
     assert nodes[Land].params.mode == "predictive" and nodes[Land].params.gain_schedule == "table1"
-    assert (nodes[Land].params.descent_speed, nodes[Land].params.final_height, nodes[Land].params.final_speed) == (0.3, 0.7, 2.0)
+    land = nodes[Land].params
+    assert (land.descent_speed, land.final_height, land.final_speed) == (0.3, 0.7, 2.0)
     assert (nodes[PlatformLost].params.seconds, nodes[PlatformLost].params.max_error) == (0.5, 0.25)  # §3.1
     assert nodes[DrivePattern].params.v == 0.5
     assert "landing_cycle" in known_subtrees()
@@ -58,8 +62,13 @@ def test_set_overrides_reach_the_skills():
 
 def test_a_mission_swaps_the_tracking_skill_by_name():
     team = "team: {ugv: {robot: summit_xl}, uav: {robot: ardrone2}}\n"
-    for name, cls, mode in (("track_reactive", TrackReactive, "reactive"), ("track_predictive", TrackPredictive, "predictive")):
-        mission = parse_mission(f"mission: m\n{team}tree: {{skill: {name}, robot: uav, params: {{seconds: 5}}}}\n", "m.yaml")
+    for name, cls, mode in (
+        ("track_reactive", TrackReactive, "reactive"),
+        ("track_predictive", TrackPredictive, "predictive"),
+    ):
+        mission = parse_mission(
+            f"mission: m\n{team}tree: {{skill: {name}, robot: uav, params: {{seconds: 5}}}}\n", "m.yaml"
+        )
         (node,) = compile_mission(mission).nodes
         assert isinstance(node, cls) and node.params.tracker_config().mode == mode
     text = load_mission("landing_circular").text.replace(

@@ -20,7 +20,9 @@ def _states(log):
 
 def _run(tmp_path, mission, **overrides):
     log_path = tmp_path / "run.mcap"
-    result = run_mission(mission, log_path=log_path, progress=False, overrides={k: str(v) for k, v in overrides.items()})
+    result = run_mission(
+        mission, log_path=log_path, progress=False, overrides={k: str(v) for k, v in overrides.items()}
+    )
     return result, read_log(log_path)
 
 
@@ -77,7 +79,9 @@ def test_at_10_hz_with_gusts_the_uav_lands_on_the_moving_platform(tmp_path):
     # the touchdown test reads every IMU sample of its window, not one per tick: at a 10 Hz tick rate the
     # platform's vibration is not aliased away into "landed on the ground" (§3.3.1)
     gusts = "{wind: {gust: 3.0}}"
-    result, log = _run(tmp_path, "landing_circular", track_seconds=2.0, **{"run.tick_hz": 10, "world.disturbances": gusts})
+    result, log = _run(
+        tmp_path, "landing_circular", track_seconds=2.0, **{"run.tick_hz": 10, "world.disturbances": gusts}
+    )
     assert result.outcome == "success"
     outcome = next(e for e in log.events if e["kind"] == "outcome" and e["skill"] == "land")
     assert outcome["status"] == "SUCCESS" and "landed on the moving platform" in outcome["message"]

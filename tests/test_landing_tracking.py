@@ -49,7 +49,9 @@ def test_frames_are_posed_with_the_estimate_and_the_urdf_mount_not_the_true_came
         p_true, q_true = uav.pose()
         p_optical, R_optical = uav.sensor("bottom_camera").optical_pose()
         R_est, R_true = rotation_matrix(estimate.orientation), rotation_matrix(q_true)
-        assert R_est.T @ (camera.position - estimate.position) == pytest.approx(R_true.T @ (p_optical - p_true), abs=1e-6)
+        assert R_est.T @ (camera.position - estimate.position) == pytest.approx(
+            R_true.T @ (p_optical - p_true), abs=1e-6
+        )
         assert R_est.T @ camera.rotation == pytest.approx(R_true.T @ R_optical, abs=1e-6)
         # the sonar's plane is the platform's top: the camera's height above it within the sonar noise
         assert camera.position[2] - camera.z_plane == pytest.approx(p_optical[2] - p_platform[2], abs=0.05)
@@ -66,7 +68,9 @@ def _vibration(t: np.ndarray, rng: np.random.Generator, rms: float, touchdown: f
     """A rider's specific force (m/s², body frame): descending until ``touchdown`` (s), an impact, then riding a
     platform that shakes it along x at 11–29 Hz with ``rms`` (0: the ground), plus noise and a constant bias."""
     riding = t >= touchdown
-    fx = np.where(riding, rms * (np.sin(2 * math.pi * 11.0 * t) + 0.8 * np.sin(2 * math.pi * 29.2 * t + 1.0)) / 0.9, 0.0)
+    fx = np.where(
+        riding, rms * (np.sin(2 * math.pi * 11.0 * t) + 0.8 * np.sin(2 * math.pi * 29.2 * t + 1.0)) / 0.9, 0.0
+    )
     fz = np.full_like(t, 9.81)
     impact = (t >= touchdown) & (t < touchdown + 0.01)
     fz[impact] = 150.0

@@ -55,7 +55,9 @@ def test_unknown_key_in_a_node_suggests_the_closest():
 
 def test_unknown_node_type_suggests_the_closest():
     error = error_of("mission: m\ntree:\n  sequence:\n    - skill: wait\n    - sequense:\n        - skill: hover\n")
-    assert str(error).startswith("bad.yaml:5:7: tree.sequence[1].sequense: unknown node type 'sequense'; expected one of")
+    assert str(error).startswith(
+        "bad.yaml:5:7: tree.sequence[1].sequense: unknown node type 'sequense'; expected one of"
+    )
     assert str(error).endswith("did you mean 'sequence'?")
 
 
@@ -134,8 +136,10 @@ def test_bad_overrides_list_close_names():
     assert caught.value.suggestion == "cruise_height"
     with pytest.raises(MissionError) as caught:
         load_mission(ALL_NODES, {"world.sed": "3"})
-    assert str(caught.value) == (f"{SHOWN}: --set world.sed=3: unknown key 'world.sed'; "
-                                 "expected one of world.disturbances, world.scene, world.seed, world.sensing; did you mean 'world.seed'?")
+    assert str(caught.value) == (
+        f"{SHOWN}: --set world.sed=3: unknown key 'world.sed'; "
+        "expected one of world.disturbances, world.scene, world.seed, world.sensing; did you mean 'world.seed'?"
+    )
 
 
 def test_override_with_a_wrong_type_points_at_the_key_and_names_the_override():

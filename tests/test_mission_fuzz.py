@@ -74,7 +74,12 @@ def to_yaml(data: dict) -> str:
     return yaml.safe_dump(data, sort_keys=False, allow_unicode=True, width=10_000)
 
 
-@settings(max_examples=25, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=25,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
 @given(path=st.sampled_from(PATHS), value=HOSTILE, add_key=st.booleans())
 def test_a_mutated_mission_fails_located_or_runs(tmp_path_factory, path, value, add_key):
     folder = tmp_path_factory.mktemp("fuzz")
@@ -82,7 +87,9 @@ def test_a_mutated_mission_fails_located_or_runs(tmp_path_factory, path, value, 
     mission_path.write_text(to_yaml(mutated(path, value, add_key)))
     try:
         mission = load_mission(mission_path)
-        result = run_mission(mission, until=min(mission.spec.run.until or 1.0, 1.0), log_path=folder / "run.mcap", progress=False)
+        result = run_mission(
+            mission, until=min(mission.spec.run.until or 1.0, 1.0), log_path=folder / "run.mcap", progress=False
+        )
     except MissionError as err:
         assert LOCATED.match(str(err)), f"{path}={value!r}: unlocated error {err}"
         return

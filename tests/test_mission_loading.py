@@ -128,7 +128,8 @@ def test_override_of_a_section_left_out_of_the_file():
 def test_scalars_follow_yaml_1_2():
     doc = load_yaml("a: yes\nb: no\nc: on\nd: true\ne: 1e3\nf: 2.5\ng: 7\nh: ~\n")
     assert doc.data == {"a": "yes", "b": "no", "c": "on", "d": True, "e": 1000.0, "f": 2.5, "g": 7, "h": None}
-    assert [parse_scalar(v) for v in ("3.5", "false", "[1, 2]", "hover", "a: b: c")] == [3.5, False, [1, 2], "hover", "a: b: c"]
+    scalars = ("3.5", "false", "[1, 2]", "hover", "a: b: c")
+    assert [parse_scalar(v) for v in scalars] == [3.5, False, [1, 2], "hover", "a: b: c"]
 
 
 def test_positions_are_one_based_key_starts():

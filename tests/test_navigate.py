@@ -40,7 +40,9 @@ def test_local_plan_turns_away_from_a_wall_and_stops_when_boxed_in():
     plan = local_plan(wall, np.array([3.0, 0.0]), 2.0, 0.0, 2.0, 1.7, footprint)
     assert plan.v < 0.5  # cannot drive straight through; slow, clear of the wall
     assert plan.clearance >= 0.15
-    ring = np.column_stack((0.45 * np.cos(np.linspace(0, 2 * np.pi, 120)), 0.45 * np.sin(np.linspace(0, 2 * np.pi, 120))))
+    ring = np.column_stack(
+        (0.45 * np.cos(np.linspace(0, 2 * np.pi, 120)), 0.45 * np.sin(np.linspace(0, 2 * np.pi, 120)))
+    )
     assert local_plan(ring, np.array([3.0, 0.0]), 2.0, 0.0, 2.0, 1.7, footprint).v == 0.0
 
 

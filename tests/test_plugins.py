@@ -27,11 +27,15 @@ def plugin_dir(tmp_path_factory):
     work = tmp_path_factory.mktemp("plugin")
     source = shutil.copytree(EXAMPLE, work / "src")  # keep build artefacts out of the repository
     pip = [sys.executable, "-m", "pip", "--disable-pip-version-check", "-q"]
-    built = subprocess.run([*pip, "wheel", "--no-deps", "-w", str(work / "dist"), str(source)], capture_output=True, text=True)
+    built = subprocess.run(
+        [*pip, "wheel", "--no-deps", "-w", str(work / "dist"), str(source)], capture_output=True, text=True
+    )
     assert built.returncode == 0, built.stderr
     [wheel] = (work / "dist").glob("*.whl")
     target = work / "site"
-    done = subprocess.run([*pip, "install", "--no-deps", "--target", str(target), str(wheel)], capture_output=True, text=True)
+    done = subprocess.run(
+        [*pip, "install", "--no-deps", "--target", str(target), str(wheel)], capture_output=True, text=True
+    )
     assert done.returncode == 0, done.stderr
     return target
 

@@ -82,7 +82,9 @@ def test_preempting_command_survives_the_safe_stop_of_the_preempted_skill(stub_w
     context = RunContext(world=stub_world)
     high, low = Drive("high", context=context, robot="r"), Drive("low", context=context, robot="r")
     high.speed, low.speed = 1.0, 0.5
-    root = Selector("root", memory=False, children=[GuardedBranch("guarded", [Flag("flag", context=context)], high, context), low])
+    root = Selector(
+        "root", memory=False, children=[GuardedBranch("guarded", [Flag("flag", context=context)], high, context), low]
+    )
     robot = stub_world.robots["r"]
     Flag.up = False
     tick(root, context, 2)
@@ -133,7 +135,9 @@ def test_priorities_record_who_preempted_whom(stub_world):
 
     context = RunContext(world=stub_world, recorder=Sink())
     low = Drive("low", context=context, robot="r")
-    root = Priorities("p", [GuardedBranch("b", [Flag("flag", context=context)], Idle("idle", context=context), context), low], context)
+    root = Priorities(
+        "p", [GuardedBranch("b", [Flag("flag", context=context)], Idle("idle", context=context), context), low], context
+    )
     Flag.up = False
     tick(root, context)
     Flag.up = True

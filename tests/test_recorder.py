@@ -50,7 +50,9 @@ def add_box(world, label, half, position, rgba=(0.2, 0.4, 0.6, 1.0)):
     cid = world.client_id
     col = pybullet.createCollisionShape(pybullet.GEOM_BOX, halfExtents=half, physicsClientId=cid)
     vis = pybullet.createVisualShape(pybullet.GEOM_BOX, halfExtents=half, rgbaColor=rgba, physicsClientId=cid)
-    body = pybullet.createMultiBody(0.0, col, vis, position, [0, 0, math.sin(0.25), math.cos(0.25)], physicsClientId=cid)
+    body = pybullet.createMultiBody(
+        0.0, col, vis, position, [0, 0, math.sin(0.25), math.cos(0.25)], physicsClientId=cid
+    )
     world.scene.objects[label] = SceneObject(label, body, "box", tuple(position), ("wall",))
 
 
@@ -92,7 +94,14 @@ def test_every_channel_round_trips(tmp_path):
     assert [e["kind"] for e in log.events] == [
         "run_start", "preemption", "operator", "outcome", "state_change", "error", "run_end",
     ]
-    assert log.events[1] == {"t": 0.7, "kind": "preemption", "preempted": "explore", "by": "dock", "why": "battery low", "robot": "uav"}
+    assert log.events[1] == {
+        "t": 0.7,
+        "kind": "preemption",
+        "preempted": "explore",
+        "by": "dock",
+        "why": "battery low",
+        "robot": "uav",
+    }
     assert len(log.events_of("run_end")) == 1  # close() adds none when the run logged its own
 
     tf = log.messages("/tf")[0]
@@ -150,7 +159,8 @@ def test_schema_names_and_encodings_match_foxglove(tmp_path):
         assert schema.name == name and schema.encoding == "jsonschema"
         body = json.loads(schema.data)
         assert body == SCHEMAS[name] and body["title"] == name and body["type"] == "object"
-    assert SCHEMAS["marsupial.Event"]["properties"]["kind"]["enum"] == list(EVENT_KINDS)  # schemas.json knows every kind
+    # schemas.json knows every kind
+    assert SCHEMAS["marsupial.Event"]["properties"]["kind"]["enum"] == list(EVENT_KINDS)
     assert {c.message_encoding for c in summary.channels.values()} == {"json"}
     fields = {
         "foxglove.FrameTransform": {"timestamp", "parent_frame_id", "child_frame_id", "translation", "rotation"},
@@ -170,7 +180,9 @@ def test_schema_names_and_encodings_match_foxglove(tmp_path):
 
 def test_tree_is_snapshot_only_on_change(tmp_path):
     path = tmp_path / "run.mcap"
-    takeoff = py_trees.behaviours.StatusQueue("takeoff", [Status.RUNNING, Status.RUNNING, Status.SUCCESS], Status.SUCCESS)
+    takeoff = py_trees.behaviours.StatusQueue(
+        "takeoff", [Status.RUNNING, Status.RUNNING, Status.SUCCESS], Status.SUCCESS
+    )
     hover = py_trees.behaviours.Running("hover")
     root = py_trees.composites.Sequence("mission", memory=True, children=[takeoff, hover])
     written = []

@@ -1,4 +1,6 @@
-"""rendezvous and relative_hold (Narváez §IV, Fig. 3; §IV-A, Fig. 4): the encounter over the arm, then holding a pose in M.
+"""rendezvous and relative_hold (Narváez §IV, Fig. 3; §IV-A, Fig. 4).
+
+The encounter over the arm, then holding a pose in M.
 
 The carrier drives at the docking speed (0.5 m/s, §V-B-1) the whole time.
 The eye-in-hand camera runs at 320×240 to keep the test fast; the bundle is

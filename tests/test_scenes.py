@@ -118,7 +118,10 @@ def test_operator_path_is_clear_for_the_carrier_and_crosses_the_docking_spots(us
     assert {"hall", "corridor", "door_6", "target_room"} <= crossed
     assert np.linalg.norm(path[-1] - np.asarray(scene.object("target").position[:2])) < 2.5
     # in order: the corridor (first docking), then the door frame (second docking)
-    first = {label: next(i for i, p in enumerate(samples) if scene.zone(label).contains(p)) for label in ("corridor", "door_6")}
+    first = {
+        label: next(i for i, p in enumerate(samples) if scene.zone(label).contains(p))
+        for label in ("corridor", "door_6")
+    }
     assert first["corridor"] < first["door_6"]
 
 
@@ -154,7 +157,9 @@ def test_mockup_has_four_see_through_apertures_of_the_four_shape_classes(mockup)
         zone, clear = scene.zone(label), scene.zone(f"{label}_clear")
         assert zone.size[1] == pytest.approx(0.1) and zone.center[1] == pytest.approx(0.0)  # in the wall plane y = 0
         assert 0.5 < zone.center[2] < 1.1  # within reach of the carrier's arm
-        assert np.all(np.asarray(clear.lo) >= np.asarray(zone.lo) - 1e-9) and np.all(np.asarray(clear.hi) <= np.asarray(zone.hi) + 1e-9)
+        assert np.all(np.asarray(clear.lo) >= np.asarray(zone.lo) - 1e-9) and np.all(
+            np.asarray(clear.hi) <= np.asarray(zone.hi) + 1e-9
+        )
         # the micro-scout fits through the clear part, but the opening is constricted (< 0.35 m)
         assert clear.size[0] > MAV_PROFILE[0] and clear.size[2] > MAV_PROFILE[1]
         assert max(zone.size) < 0.35
@@ -183,7 +188,9 @@ def test_mockup_corridor_hallway_and_objects_of_interest(mockup):
 def test_mockup_wall_closes_the_room_but_the_carrier_can_stand_before_each_aperture(mockup):
     """Arora et al. Sec. V: no ground route forward; the apertures are the only way in."""
     xs = np.linspace(-3.45, 3.45, 70)
-    hits = pybullet.rayTestBatch([[x, -1.0, 0.3] for x in xs], [[x, 1.0, 0.3] for x in xs], physicsClientId=mockup.client_id)
+    hits = pybullet.rayTestBatch(
+        [[x, -1.0, 0.3] for x in xs], [[x, 1.0, 0.3] for x in xs], physicsClientId=mockup.client_id
+    )
     assert all(h[0] != -1 for h in hits)
     stands = [(z.center[0], -0.8) for z in mockup.scene.zones_tagged("aperture")]
     assert _probe_hits(mockup, stands, CARRIER_RADIUS) == set()

@@ -79,7 +79,8 @@ def test_pbvs_target_centres_the_marker_in_the_eye_in_hand_image():
     kinematics = ArmKinematics.from_urdf("mobile_manipulator.urdf", "arm_base", "part_a")
     T_E_C = np.linalg.inv(kinematics.transform(np.zeros(6))) @ kinematics.transform(np.zeros(6), "eye_in_hand")
     target = PbvsTarget(standoff=0.5)
-    assert target.aim_Q == pytest.approx((-0.0175, 0.0, -0.034))  # the tag plate's centre (x -0.130..0.095 m) under the Bebop 2
+    # the tag plate's centre (x -0.130..0.095 m) under the Bebop 2
+    assert target.aim_Q == pytest.approx((-0.0175, 0.0, -0.034))
     T_M_Q = _pose([0.30, -0.10, 1.25], yaw=0.6)
     p_E_M, R_M_E = pbvs_target(T_M_Q, T_E_C, target)
     np.testing.assert_allclose(R_M_E, rot_z(0.6), atol=1e-12)  # Part A level, heading with the UAV

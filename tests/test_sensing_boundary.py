@@ -56,13 +56,20 @@ DEFAULT_TRAP_RUN_S = 25.0
 def _module_of(node: ast.ImportFrom, path: Path) -> str:
     if node.level == 0:
         return node.module or ""
-    package = ["marsupial", "skills", *path.relative_to(SKILLS_DIR).parts[:-1]] if SKILLS_DIR in path.parents else ["marsupial", "trees"]
+    package = (
+        ["marsupial", "skills", *path.relative_to(SKILLS_DIR).parts[:-1]]
+        if SKILLS_DIR in path.parents
+        else ["marsupial", "trees"]
+    )
     base = package[: len(package) - (node.level - 1)]
     return ".".join(base + ([node.module] if node.module else []))
 
 
 def _model_fact(name: str) -> bool:
-    """An importable fact of a robot's model: an UPPER_CASE constant or a ``…Limits``/``…Spec``/``…Gains``/``…Mount`` type."""
+    """An importable fact of a robot's model.
+
+    An UPPER_CASE constant or a ``…Limits``/``…Spec``/``…Gains``/``…Mount`` type.
+    """
     return name.isupper() or name.endswith(("Limits", "Spec", "Gains", "Mount"))
 
 

@@ -1,4 +1,6 @@
-"""store and deploy (Narváez §IV-B, §IV-C, §V-A): storage with the ground sensors clear and charging; release once thrust holds.
+"""store and deploy (Narváez §IV-B, §IV-C, §V-A).
+
+Storage with the ground sensors clear and charging; release once thrust holds.
 
 Skill-level runs in a small harness against the real world; the deploy run is
 logged to MCAP and its outcome read back from the log.
@@ -39,7 +41,8 @@ def test_store_carries_the_uav_clear_of_the_ground_sensors_and_charges_it():
         scan = carrier.lidar.read().data
         assert uav.body_id not in scan.hit_bodies
         assert np.isfinite(scan.ranges).sum() == 0  # open floor: no echo at all, nothing of the robot team
-        segmentation = carrier.front_rgbd.measure().segmentation  # a frame rendered now (the stream lags by its latency)
+        # a frame rendered now (the stream lags by its latency)
+        segmentation = carrier.front_rgbd.measure().segmentation
         assert not np.any(segmentation == uav.body_id)
         carrier.drive(1.0, 0.5)  # carried rigidly while driving and turning
         world.step(2.0)

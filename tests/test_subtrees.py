@@ -108,7 +108,9 @@ def test_errors_inside_a_subtree_point_into_its_file(tmp_path):
                          "in subtree 'bad_times' included at here.yaml:2:8")
     error = error_of("mission: m\ntree: {subtree: bad_times, params: {n: 2.5}}\n")
     assert "invalid value 2.5" in str(error) and "'${n}' set at here.yaml:2:37" in str(error)
-    (tmp_path / "ref.yaml").write_text("subtree: ref\nparams: {speed: 1}\ntree: {skill: goto, params: {v: '${sped}'}}\n")
+    (tmp_path / "ref.yaml").write_text(
+        "subtree: ref\nparams: {speed: 1}\ntree: {skill: goto, params: {v: '${sped}'}}\n"
+    )
     with pytest.raises(MissionError) as caught:
         parse_mission("mission: m\nparams: {height: 2}\ntree: {subtree: ./ref.yaml}\n", path=tmp_path / "m.yaml")
     assert "ref.yaml:3:30: tree.params.v: unknown parameter reference '${sped}'" in str(caught.value)

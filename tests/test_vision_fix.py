@@ -14,7 +14,9 @@ from marsupial.world.team_link import TeamLinkConfig
 def _fix_from_truth(uav, stamp):
     """A fix of the UAV's true pose at ``stamp`` (the test plays the observer; the pose was read then)."""
     p, q = uav.pose()
-    return VisionFix(stamp, tuple(float(v) for v in p), math.atan2(2 * (q[3] * q[2] + q[0] * q[1]), 1 - 2 * (q[1] ** 2 + q[2] ** 2)))
+    return VisionFix(
+        stamp, tuple(float(v) for v in p), math.atan2(2 * (q[3] * q[2] + q[0] * q[1]), 1 - 2 * (q[1] ** 2 + q[2] ** 2))
+    )
 
 
 def test_late_fixes_correct_a_drifted_estimate_without_moving_the_vehicle():

@@ -32,7 +32,9 @@ def test_worlds_in_one_process_are_isolated():
         box = pybullet.createCollisionShape(pybullet.GEOM_BOX, halfExtents=[0.1] * 3, physicsClientId=a.client_id)
         body = pybullet.createMultiBody(1.0, box, -1, [0, 0, 2], physicsClientId=a.client_id)
         a.step(0.5)
-        assert pybullet.getNumBodies(physicsClientId=a.client_id) == pybullet.getNumBodies(physicsClientId=b.client_id) + 1
+        assert (
+            pybullet.getNumBodies(physicsClientId=a.client_id) == pybullet.getNumBodies(physicsClientId=b.client_id) + 1
+        )
         z = pybullet.getBasePositionAndOrientation(body, physicsClientId=a.client_id)[0][2]
         assert z == pytest.approx(2 - 0.5 * 9.81 * 0.5**2, abs=0.02)
 
@@ -54,7 +56,9 @@ def _driven_box(world, limits):
     shape = pybullet.createCollisionShape(pybullet.GEOM_BOX, halfExtents=[0.3, 0.25, 0.1], physicsClientId=cid)
     body = pybullet.createMultiBody(20.0, shape, -1, [0, 0, 0.15], physicsClientId=cid)
     drive = DiffDrive(world, body, limits, "test/drive")
-    world.add_actor(type("A", (), {"pre_physics": lambda self, dt: drive.pre_physics(dt), "post_physics": lambda self, dt: None})())
+    world.add_actor(
+        type("A", (), {"pre_physics": lambda self, dt: drive.pre_physics(dt), "post_physics": lambda self, dt: None})()
+    )
     return body, drive
 
 
@@ -87,7 +91,9 @@ def test_diff_drive_is_stopped_by_a_wall():
 def test_missing_asset_names_the_known_ones():
     from marsupial.world.assets import asset_path
 
-    with pytest.raises(UnknownNameError, match=r"unknown asset 'bebop3.urdf'\. Did you mean 'bebop2.urdf'\?.*summit_xl.urdf"):
+    with pytest.raises(
+        UnknownNameError, match=r"unknown asset 'bebop3.urdf'\. Did you mean 'bebop2.urdf'\?.*summit_xl.urdf"
+    ):
         asset_path("bebop3.urdf")
 
 

@@ -140,7 +140,9 @@ class When:
 
     def __post_init__(self) -> None:
         if self.start < 0 or not self.duration > 0:
-            raise ValueError(f"start must be >= 0 s and duration > 0 s, got start={self.start}, duration={self.duration}")
+            raise ValueError(
+                f"start must be >= 0 s and duration > 0 s, got start={self.start}, duration={self.duration}"
+            )
         if self.rate_hz is not None and (not self.rate_hz > 0 or math.isinf(self.duration)):
             raise ValueError("random windows need rate_hz > 0 and a finite duration")
 
@@ -417,7 +419,9 @@ def _entries(where: str, key: str, spec: dict[str, Any]) -> Iterator[tuple[str, 
         for i, entry in enumerate(value):
             yield f"[{i}]", entry
     else:
-        raise WorldError(f"{where}.{key}: expected a mapping or a list of mappings, got {type(value).__name__} {value!r}")
+        raise WorldError(
+            f"{where}.{key}: expected a mapping or a list of mappings, got {type(value).__name__} {value!r}"
+        )
 
 
 def _number(where: str, key: str, value: Any, low: float | None = None, high: float | None = None) -> float:

@@ -50,7 +50,10 @@ class PlanElement:
         return np.asarray(self.position) + (signs * half) @ rotation_matrix(self.orientation).T
 
     def distance(self, point: Sequence[float]) -> float:
-        """Distance (m) from ``point`` (``[x, y]``: plan view at the element's mid-height, or ``[x, y, z]``) to the box; 0 inside."""
+        """Distance (m) from ``point`` to the box; 0 inside.
+
+        ``point`` is ``[x, y]`` (plan view, at the element's mid-height) or ``[x, y, z]``.
+        """
         p = np.asarray(point, dtype=float)
         if len(p) == 2:
             p = np.append(p, self.position[2])

@@ -244,7 +244,9 @@ def read_scene_spec(path: Path) -> dict[str, Any]:
     if spec is None:
         spec = {}
     if not isinstance(spec, dict):
-        raise WorldError(f"{path}: a scene file is a mapping with keys {', '.join(SCENE_KEYS)}; got {type(spec).__name__}")
+        raise WorldError(
+            f"{path}: a scene file is a mapping with keys {', '.join(SCENE_KEYS)}; got {type(spec).__name__}"
+        )
     return spec
 
 
@@ -311,7 +313,9 @@ class _Fields:
             raise self._fail(key, expected)
         return float(value)
 
-    def vector(self, key: str, n: int, default: Any = _REQUIRED, expected: str = "", positive: bool = False) -> tuple[float, ...]:
+    def vector(
+        self, key: str, n: int, default: Any = _REQUIRED, expected: str = "", positive: bool = False
+    ) -> tuple[float, ...]:
         expected = expected or f"a list of {n} numbers"
         value = self._get(key, default, expected)
         ok = isinstance(value, (list, tuple)) and len(value) == n and all(
@@ -384,7 +388,9 @@ def _make_floor(world: World, spec: _Fields, draw: bool) -> Floor:
     cid = world.client_id
     collision = pybullet.createCollisionShape(pybullet.GEOM_BOX, halfExtents=half, physicsClientId=cid)
     if draw:
-        visual = pybullet.createVisualShape(pybullet.GEOM_BOX, halfExtents=half, rgbaColor=_rgba(rgb), physicsClientId=cid)
+        visual = pybullet.createVisualShape(
+            pybullet.GEOM_BOX, halfExtents=half, rgbaColor=_rgba(rgb), physicsClientId=cid
+        )
     else:  # a body without a visual shape gets its collision shape drawn: give it a speck instead
         visual = pybullet.createVisualShape(
             pybullet.GEOM_SPHERE, radius=1e-4, visualFramePosition=[0, 0, -1], physicsClientId=cid
@@ -420,7 +426,9 @@ def _make_object(world: World, spec: _Fields) -> SceneObject:
     position = spec.vector("position", 3, expected="[x, y, z] of the centre in metres")
     if "rpy" in spec.spec and "yaw" in spec.spec:
         raise _SpecError(f"{spec.entry}: give either 'yaw' or 'rpy', not both")
-    rpy = spec.vector("rpy", 3, (0.0, 0.0, spec.number("yaw", 0.0, "an angle in radians")), "[roll, pitch, yaw] in radians")
+    rpy = spec.vector(
+        "rpy", 3, (0.0, 0.0, spec.number("yaw", 0.0, "an angle in radians")), "[roll, pitch, yaw] in radians"
+    )
     orientation = tuple(pybullet.getQuaternionFromEuler(rpy))
     rgb = spec.rgb((160, 160, 160))
     tags = spec.tags()

@@ -77,7 +77,11 @@ class Referee:
             self.contacts[uav.name] += 1
             self.sink.metric("unintended_contacts", self.contacts[uav.name], robot=uav.name)
             self.sink.event(
-                "unintended_contact", uav=uav.name, carrier=carrier.name, uav_link=event.link_a, carrier_link=event.link_b
+                "unintended_contact",
+                uav=uav.name,
+                carrier=carrier.name,
+                uav_link=event.link_a,
+                carrier_link=event.link_b,
             )
 
         return touched

@@ -45,7 +45,10 @@ class TeamLinkConfig:
     def scaled(self, noise_scale: float) -> TeamLinkConfig:
         """This link with latency, jitter and loss multiplied by ``noise_scale`` (loss capped at 1)."""
         return TeamLinkConfig(
-            self.latency_s * noise_scale, self.jitter_s * noise_scale, min(1.0, self.drop * noise_scale), self.telemetry_hz
+            self.latency_s * noise_scale,
+            self.jitter_s * noise_scale,
+            min(1.0, self.drop * noise_scale),
+            self.telemetry_hz,
         )
 
 

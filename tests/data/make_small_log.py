@@ -90,7 +90,9 @@ def make_small_log(path: Path) -> None:
             rec.log_metric(t, "battery", round(1.0 - 0.05 * tick, 6), robot="uav")
             if tick == 2:
                 rec.log_event(t, "state_change", node="takeoff", robot="uav", previous="RUNNING", current="SUCCESS")
-                rec.log_event(t, "outcome", node="takeoff", skill="takeoff", robot="uav", status="SUCCESS", message="airborne")
+                rec.log_event(
+                    t, "outcome", node="takeoff", skill="takeoff", robot="uav", status="SUCCESS", message="airborne"
+                )
             if tick == 4:
                 rec.log_event(t, "operator", command="dock", source="script", why="corridor ahead")
             if tick == 6:

@@ -182,7 +182,10 @@ class VisionFixFusion:
         return now - self.last_stamp <= self.gains.timeout
 
     def flow_rejected(self, now: float, ex: float, ey: float) -> bool:
-        """True when a flow sample of innovation ``(ex, ey)`` (m/s) is an outlier against the vision-anchored velocity."""
+        """True when a flow sample of innovation ``(ex, ey)`` (m/s) is an outlier.
+
+        The gate is against the vision-anchored velocity.
+        """
         return ex * ex + ey * ey > self.gains.flow_gate**2 and self.converged and self.recent(now)
 
     def poll(self) -> tuple[float, ...] | None:
@@ -229,7 +232,10 @@ class VisionFixFusion:
         return correction
 
     def _at(self, t: float) -> tuple[float, float, float, float] | None:
-        """The estimate (position m, heading rad) at ``t`` with the corrections applied since; ``None`` outside the history."""
+        """The estimate (position m, heading rad) at ``t`` with the corrections applied since.
+
+        ``None`` outside the history.
+        """
         history = self._history
         if not history or t < history[0][0]:
             return None

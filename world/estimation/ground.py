@@ -182,7 +182,10 @@ class MapLocalization(Estimator):
         """A new map fix: true footprint pose plus the advanced OU error; remember the odometry pose at the fix."""
         phi = self._phi
         noise = self.rng.standard_normal(3).tolist()
-        self._error = [e * phi + s * math.sqrt(1.0 - phi * phi) * n for e, s, n in zip(self._error, self._sigma, noise, strict=True)]
+        self._error = [
+            e * phi + s * math.sqrt(1.0 - phi * phi) * n
+            for e, s, n in zip(self._error, self._sigma, noise, strict=True)
+        ]
         p, q = self.robot.footprint_pose()
         ex, ey, eyaw = self._error
         self._fix_pose = (float(p[0]) + ex, float(p[1]) + ey, float(p[2]), yaw_of(q) + eyaw)

@@ -145,7 +145,10 @@ class Autopilot:
 
     # ------------------------------------------------------------ commands
     def command(self, vx: float, vy: float, vz: float, yaw_rate: float = 0.0, frame: str = "body") -> None:
-        """Track ``(vx, vy, vz)`` m/s and ``yaw_rate`` rad/s in ``frame`` until the next command (clipped to the limits)."""
+        """Track ``(vx, vy, vz)`` m/s and ``yaw_rate`` rad/s in ``frame`` until the next command.
+
+        The command is clipped to the limits.
+        """
         if frame not in FRAMES:
             raise ValueError(f"frame must be one of {FRAMES}, got '{frame}'")
         values = [float(v) for v in (vx, vy, vz, yaw_rate)]
@@ -185,7 +188,9 @@ class Autopilot:
         wind: Sequence[float],
         dt: float,
     ) -> tuple[tuple[float, float, float], tuple[float, float, float], float, float]:
-        """One update over ``dt`` s from the estimate ``nav`` and the true attitude ``q``, velocity ``v``, rates ``w_world``.
+        """One update over ``dt`` s from the estimate ``nav`` and the true state.
+
+        The true state: attitude ``q``, velocity ``v``, angular velocity ``w_world`` (rad/s, world frame).
 
         Returns ``(force_body (N, rotor thrust + drag, at the centre of mass),
         torque_world (N m), thrust (N), drag power (W, ≤ 0))``.

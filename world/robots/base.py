@@ -98,7 +98,9 @@ class Robot:
             info = pybullet.getJointInfo(body, j, physicsClientId=self.cid)
             self.links[info[12].decode()] = j
         p_base, q_base = self.pose()
-        self._link_offsets = {name: base_frame_offset(p_base, q_base, *self.link_pose(index)) for name, index in self.links.items()}
+        self._link_offsets = {
+            name: base_frame_offset(p_base, q_base, *self.link_pose(index)) for name, index in self.links.items()
+        }
         return body
 
     def add_sensor(self, sensor: Sensor) -> Sensor:
@@ -156,7 +158,10 @@ class Robot:
         return np.array(state[4]), np.array(state[5])
 
     def link_offset(self, link: str) -> tuple[np.ndarray, np.ndarray]:
-        """Position (m) and rotation of ``link`` in the base frame as the URDF places it (the model, not a measurement)."""
+        """Position (m) and rotation of ``link`` in the base frame as the URDF places it.
+
+        This is the model, not a measurement.
+        """
         try:
             p, R = self._link_offsets[link]
         except KeyError:
@@ -172,7 +177,10 @@ class Robot:
         return p_link + R_world_link @ offset, R_world_link @ R_link_frame
 
     def sensor(self, name: str) -> Sensor:
-        """The sensor called ``name`` (full ``"<robot>/<sensor>"`` or short name); the error lists this robot's sensors."""
+        """The sensor called ``name`` (full ``"<robot>/<sensor>"`` or short name).
+
+        The error for an unknown name lists this robot's sensors.
+        """
         try:
             return self.sensors[name] if name in self.sensors else self.sensors[f"{self.name}/{name}"]
         except KeyError:

@@ -307,7 +307,9 @@ class Quadrotor(Robot):
         self._com_base = tuple(float(c) for c in com / self.mass)
         inertia = tuple(pybullet.getDynamicsInfo(body, -1, physicsClientId=cid)[2])
 
-        pack = spec.battery if battery_capacity_mAh is None else replace(spec.battery, capacity_mAh=battery_capacity_mAh)
+        pack = (
+            spec.battery if battery_capacity_mAh is None else replace(spec.battery, capacity_mAh=battery_capacity_mAh)
+        )
         self.battery = Battery(pack, battery_soc)
         self._clock = world.clock
         self._docked = False

@@ -284,6 +284,7 @@ class Camera(Sensor[CameraFrame]):
             if self._depth_bank is None:
                 self._depth_bank = self.rng.standard_normal(depth.size + NOISE_BANK_SLACK, dtype=np.float32)
             start = int(self.rng.integers(NOISE_BANK_SLACK))
-            noise = self._depth_bank[start : start + depth.size].reshape(depth.shape) * np.float32(self.depth_noise_per_m)
+            bank = self._depth_bank[start : start + depth.size].reshape(depth.shape)
+            noise = bank * np.float32(self.depth_noise_per_m)
             noise *= depth
             depth += noise

@@ -50,7 +50,8 @@ class FlowData:
     Attributes:
         valid: False when no surface is in range (the velocity is then 0).
         vx, vy: velocity relative to the surface (m/s), heading frame (x forward, y left).
-        range: median depth (m) of the surface along the camera axis, by which the device scaled the flow (``inf`` if none).
+        range: median depth (m) of the surface along the camera axis, by which the device scaled the flow
+            (``inf`` if none).
     """
 
     valid: bool

@@ -114,7 +114,10 @@ def rotation_rows(q: Quat) -> tuple[float, ...]:
 
 
 class Imu(Sensor[ImuData]):
-    """IMU of ``robot``: ``config.noise_std`` on accelerations (m/s²), biases and attitude error per :class:`ImuErrors`."""
+    """IMU of ``robot``.
+
+    ``config.noise_std`` on accelerations (m/s²), biases and attitude error per :class:`ImuErrors`.
+    """
 
     def __init__(self, robot: Inertial, name: str, config: SensorConfig, errors: ImuErrors = ImuErrors()):
         super().__init__(robot.world, f"{robot.name}/{name}", config)

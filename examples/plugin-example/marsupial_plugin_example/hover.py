@@ -11,7 +11,10 @@ from marsupial.trees.skill import NodeParams
 
 
 class MeteredHover(Hover):
-    """Hold a UAV in place like ``hover``, and record its horizontal drift (as its estimate sees it) as ``hover_drift``."""
+    """Hold a UAV in place like ``hover``.
+
+    Records its horizontal drift (as its estimate sees it) as the metric ``hover_drift``.
+    """
 
     class Params(NodeParams):
         seconds: float = Field(1.0, ge=0.0)
