@@ -1,4 +1,4 @@
-"""The ``marsupial`` command: run, draw, export, list, validate, replay, verify and campaign missions.
+"""The ``marsupial`` command: run, draw, export, list, validate, replay, report, verify and campaign missions.
 
 Exit codes: 0 success; 1 mission failure (or a verification mismatch);
 2 bad input (mission errors, unknown names, missing files — printed as one
@@ -304,6 +304,26 @@ def replay(log: str) -> None:
     click.echo(f"# {meta.get('mission_name', '?')} seed={meta.get('seed', '?')} outcome={run_log.outcome} "
                f"sim_time={run_log.sim_time}")
     click.echo(format_timeline(run_log), nl=False)
+
+
+@cli.command()
+@click.argument("source", type=click.Path())
+@click.option("--output", "-o", type=click.Path(dir_okay=False),
+              help="The page to write (default: LOG.html next to a log, CAMPAIGN_DIR/report.html for a campaign).")
+def report(source: str, output: str | None) -> None:
+    """Write the HTML report of a run log (SOURCE.mcap) or of a campaign folder (SOURCE = its --out).
+
+    One self-contained page (no scripts, no network): summary and outcome,
+    top-down map with true and estimated paths, behaviour-tree timeline,
+    events and operator commands, metric plots, recorded images. A campaign
+    page shows the success rate with its Wilson interval, the outcomes,
+    histograms, and links to a report of every kept trial log.
+    """
+    from .report import write_report
+
+    with bad_input():
+        page = write_report(source, output)
+    click.echo(f"report: {page}")
 
 
 @cli.command()
