@@ -13,6 +13,7 @@ import re
 import struct
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -91,3 +92,22 @@ def test_live_says_when_it_is_open_to_the_network(tmp_path):
     assert process.returncode == 1, err  # time limit
     assert url.startswith("ws://0.0.0.0:") and "open to the network on 0.0.0.0" in line
     assert "log: runs/demo_hover-" in out  # the live view does not replace the log
+
+
+def test_the_shipped_foxglove_layout_uses_recorded_topics():
+    layout = json.loads((Path(__file__).resolve().parents[1] / "docs" / "foxglove" / "marsupial.json").read_text())
+    panels = layout["configById"]
+    pose = re.compile(r"/(truth/)?\w+/pose")
+    three_d = next(config for panel, config in panels.items() if panel.startswith("3D!"))
+    assert three_d["followTf"] == "world"
+    assert all(topic in CHANNEL_SCHEMAS or pose.fullmatch(topic) for topic in three_d["topics"])
+    tree = next(config for panel, config in panels.items() if "behavior-tree" in panel)
+    assert (tree["behaviorTreeXmlTopic"], tree["behaviorTreeLogsTopic"]) == ("/tree/xml", "/tree")
+    plotted = [path["value"] for panel, config in panels.items() if panel.startswith("Plot!") for path in config["paths"]]
+    assert '/metrics{name=="battery_soc"}.value' in plotted
+    assert panels["Log!marsupial"]["topicToRender"] == "/log"
+
+    def leaves(node):
+        return [node] if isinstance(node, str) else leaves(node["first"]) + leaves(node["second"])
+
+    assert sorted(leaves(layout["layout"])) == sorted(panels)  # every configured panel is placed, and only those

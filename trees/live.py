@@ -63,26 +63,33 @@ class LiveSink:
         return f"ws://{self.host}:{self.port}"
 
     # ------------------------------------------------------------ Sink
-    def channel(self, topic: str, schema_name: str, schema: bytes) -> Any:
-        """Advertise ``topic`` (JSON messages, its JSON Schema) to every connected and future client."""
+    def channel(self, topic: str, schema_name: str, schema: bytes) -> tuple[Any, int | None]:
+        """Advertise ``topic`` (JSON messages, its JSON Schema) to every connected and future client.
+
+        Returns the SDK's channel and, for a latched topic, its id.
+        """
         foxglove = self._foxglove
-        return foxglove.Channel(
+        channel = foxglove.Channel(
             topic,
             schema=foxglove.Schema(name=schema_name, encoding="jsonschema", data=schema),
             message_encoding="json",
             context=self.context,
         )
+        return channel.base, channel.id() if topic in LATCHED_TOPICS else None
 
-    def write(self, channel: Any, ns: int, data: bytes) -> None:
+    def write(self, channel: tuple[Any, int | None], ns: int, data: bytes) -> None:
         """Send a message to the clients subscribed to ``channel``; keep latched topics' last message."""
-        with self._lock:
-            resend = [self._latest[cid] for cid in self._resend if cid in self._latest]
-            self._resend.clear()
-            if channel.topic() in LATCHED_TOPICS:
-                self._latest[channel.id()] = (channel, ns, data)
-        for old_channel, old_ns, old_data in resend:
-            old_channel.log(old_data, log_time=old_ns)
-        channel.log(data, log_time=ns)
+        base, latched_id = channel  # the SDK's channel core: bytes are sent as they are (already JSON)
+        if self._resend:
+            with self._lock:
+                resend = [self._latest[cid] for cid in self._resend if cid in self._latest]
+                self._resend.clear()
+            for old_base, old_ns, old_data in resend:
+                old_base.log(old_data, old_ns)
+        if latched_id is not None:
+            with self._lock:
+                self._latest[latched_id] = (base, ns, data)
+        base.log(data, ns)
         if ns != self._last_ns:
             self._last_ns = ns
             self.server.broadcast_time(ns)

@@ -74,7 +74,7 @@ def campaign_context(folder: Path, page: Path, reports: dict[int, Path]) -> dict
         "outcome_svg": plots.outcome_svg(overall["outcomes"]) if records else None,
         "histograms": plots.histograms(values),
         "trials": trials,
-        "folder": str(folder),
+        "folder": folder.name,  # not the whole path: pages get published
     }
 
 

@@ -158,13 +158,16 @@ def timeline_svg(
     height = 0.9 + 0.21 * max(len(rows), 1)
     fig = _figure(9.5, height)
     ax = fig.add_subplot()
+    indent = 9.0  # pt per tree level
+    column = 6.0 + max((4.7 * len(str(n["name"])) + indent * int(n["depth"]) for n in rows), default=0.0)  # pt
     for row, node in enumerate(rows):
         for status, colour in STATUS_COLOURS.items():
             bars = [(a, max(b - a, end * 1e-3)) for a, b, s in node["intervals"] if s == status]
             if bars:
                 ax.broken_barh(bars, (row - 0.38, 0.76), facecolors=colour)
-        ax.text(-0.01, row, "  " * int(node["depth"]) + str(node["name"]), transform=ax.get_yaxis_transform(),
-                ha="right", va="center", fontsize=8, parse_math=False)
+        ax.annotate(str(node["name"]), xy=(0, row), xycoords=("axes fraction", "data"), ha="left", va="center",
+                    xytext=(-column + indent * int(node["depth"]), 0), textcoords="offset points", fontsize=8,
+                    annotation_clip=False, parse_math=False)
     for mark in preemptions:
         if mark.get("row") is not None:
             ax.plot(mark["t"], mark["row"], marker="v", color="black", ms=7, zorder=5)
