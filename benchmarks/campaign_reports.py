@@ -41,7 +41,8 @@ def campaigns(trials: int) -> dict[str, dict]:
     return {
         "landing_circular": {"mission": "landing_circular", "trials": trials},
         "landing_linear": {"mission": "landing_linear", "trials": trials},
-        "docking_encounters": {"mission": str(ENCOUNTER), "trials": max(1, trials // 4), "vary": encounter_grid(quick=True)},
+        "docking_encounters": {"mission": str(ENCOUNTER), "trials": max(1, trials // 4),
+                               "vary": encounter_grid(quick=True)},
     }
 
 
@@ -50,7 +51,7 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--trials", type=int, default=4, help="seeds per campaign (per combination for docking)")
     parser.add_argument("--workers", type=int, default=2, help="parallel trials (default 2)")
-    parser.add_argument("--runs", type=Path, default=None, help="folder for the campaigns and logs (default: temporary)")
+    parser.add_argument("--runs", type=Path, default=None, help="folder of the campaigns and logs (default: temporary)")
     parser.add_argument("--pages", type=Path, default=DEFAULT_PAGES, help="where the pages go")
     args = parser.parse_args(argv)
     table = Table(title="benchmark campaigns", title_justify="left")

@@ -51,7 +51,8 @@ def run(
     overrides = {str(k): v if isinstance(v, str) else _text(v) for k, v in (set or {}).items()}
     loaded = load_mission(mission, overrides)
     log_path = default_log_path(loaded.name) if log is True else Path(log) if log else None
-    return run_mission(loaded, seed=seed, log_path=log_path, until=until, progress=progress, record_images=record_images)
+    return run_mission(loaded, seed=seed, log_path=log_path, until=until, progress=progress,
+                       record_images=record_images)
 
 
 def read_log(path: str | Path) -> RunLog:

@@ -34,7 +34,7 @@ def open_page(browser, page_path: Path, screenshot: Path):
     page = browser.new_page(viewport={"width": 1280, "height": 900})
     problems: list[str] = []
     dialogs: list[str] = []
-    page.on("console", lambda m: problems.append(f"console {m.type}: {m.text}") if m.type in ("error", "warning") else None)
+    page.on("console", lambda m: problems.append(f"{m.type}: {m.text}") if m.type in ("error", "warning") else None)
     page.on("pageerror", lambda e: problems.append(f"page error: {e}"))
     page.on("requestfailed", lambda r: problems.append(f"failed request: {r.url}"))
     page.on("dialog", lambda d: (dialogs.append(d.message), d.dismiss()))

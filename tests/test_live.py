@@ -103,7 +103,7 @@ def test_the_shipped_foxglove_layout_uses_recorded_topics():
     assert all(topic in CHANNEL_SCHEMAS or pose.fullmatch(topic) for topic in three_d["topics"])
     tree = next(config for panel, config in panels.items() if "behavior-tree" in panel)
     assert (tree["behaviorTreeXmlTopic"], tree["behaviorTreeLogsTopic"]) == ("/tree/xml", "/tree")
-    plotted = [path["value"] for panel, config in panels.items() if panel.startswith("Plot!") for path in config["paths"]]
+    plotted = [p["value"] for panel, config in panels.items() if panel.startswith("Plot!") for p in config["paths"]]
     assert '/metrics{name=="battery_soc"}.value' in plotted
     assert panels["Log!marsupial"]["topicToRender"] == "/log"
 
@@ -111,3 +111,20 @@ def test_the_shipped_foxglove_layout_uses_recorded_topics():
         return [node] if isinstance(node, str) else leaves(node["first"]) + leaves(node["second"])
 
     assert sorted(leaves(layout["layout"])) == sorted(panels)  # every configured panel is placed, and only those
+
+
+def test_a_port_in_use_is_bad_input(tmp_path):
+    from marsupial.trees.live import LiveSink
+
+    taken = LiveSink(port=0)
+    port = taken.port
+    try:
+        result = subprocess.run(
+            [sys.executable, "-m", "marsupial.trees.cli", "run", "demo_hover", "--live", "--port", str(port)],
+            capture_output=True, text=True, cwd=tmp_path, timeout=120,
+        )
+    finally:
+        taken.close()
+    assert result.returncode == 2 and "Traceback" not in result.stderr
+    assert f"--live: cannot serve on 127.0.0.1:{port}" in result.stderr and "Address already in use" in result.stderr
+    assert not (tmp_path / "runs").exists()  # nothing ran

@@ -118,9 +118,10 @@ def cli() -> None:
 @click.option("--quiet", "-q", is_flag=True, help="No progress line and no summary table.")
 @click.option("--live", is_flag=True, help="Serve the run to Foxglove over WebSocket while it runs (real-time pace).")
 @click.option("--host", help="Address the live server binds to (default: 127.0.0.1, this machine only).")
-@click.option("--port", type=click.IntRange(0, 65535), help="Port of the live server (default: 8765; 0: any free port).")
+@click.option("--port", type=click.IntRange(0, 65535),
+              help="Port of the live server (default: 8765; 0: any free port).")
 @click.option("--speed", type=float, callback=_positive_speed,
-              help="Pace the run to X times real time (default: 1 with --live/--gui/--operator, else as fast as possible).")
+              help="Pace the run to X times real time (default: 1 with --live/--gui/--operator, else at full speed).")
 def run(mission: str, seed: int | None, log_path: str | None, no_log: bool, until: float | None, gui: bool,
         sets: tuple[str, ...], operator: bool, record_images: bool, quiet: bool, live: bool, host: str | None,
         port: int | None, speed: float | None) -> None:
@@ -167,7 +168,7 @@ def _live_sink(host: str, port: int) -> Any:
 
     try:
         sink = LiveSink(host, port)
-    except Exception as err:  # the SDK raises RuntimeError for a port in use or an address it cannot bind
+    except RuntimeError as err:  # the SDK raises it for a port in use or an address it cannot bind
         raise MissionError(f"--live: cannot serve on {host}:{port} ({err})",
                            expected="a free port (--port) on an address of this machine (--host)") from None
     where = "this machine only" if host in (DEFAULT_HOST, "localhost", "::1") else f"open to the network on {host}"

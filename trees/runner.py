@@ -317,7 +317,8 @@ def run_mission(
     if until is not None and not (isinstance(until, (int, float)) and not isinstance(until, bool) and 0 < until < math.inf):
         raise MissionError(f"until {until!r} is not a time limit", expected="a finite number of simulated seconds > 0")
     if pace is not None and not (isinstance(pace, (int, float)) and not isinstance(pace, bool) and 0 < pace < math.inf):
-        raise MissionError(f"speed {pace!r} is not a pace", expected="a finite number of simulated seconds per second > 0")
+        raise MissionError(f"speed {pace!r} is not a pace",
+                           expected="a finite number of simulated seconds per second > 0")
     if pace is None and (gui or operator_stdin):
         pace = 1.0  # a person watches or types
     until = spec.run.until if until is None else float(until)

@@ -25,7 +25,8 @@ def _read_json(path: Path) -> Any:
     try:
         return json.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
-        raise LogError(f"{path.parent}: not a campaign folder (no {path.name}; expected the --out of marsupial campaign)") from None
+        raise LogError(f"{path.parent}: not a campaign folder (no {path.name}; "
+                       "expected the --out of marsupial campaign)") from None
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
         raise LogError(f"{path}: unreadable campaign file ({err})") from None
 

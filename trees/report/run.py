@@ -96,7 +96,8 @@ def _metrics(log: RunLog) -> tuple[dict[str, dict[str, tuple[np.ndarray, np.ndar
             finals.append({"name": name, "labels": labels, "t": samples[-1][0], "value": samples[-1][1],
                            "samples": len(samples)})
         if max(len(samples) for samples in lines.values()) >= 2:
-            series[name] = {labels: (np.array([t for t, _ in s]), np.array([v for _, v in s])) for labels, s in lines.items()}
+            series[name] = {labels: (np.array([t for t, _ in s]), np.array([v for _, v in s]))
+                            for labels, s in lines.items()}
     return series, finals
 
 
@@ -124,7 +125,8 @@ def _event_rows(log: RunLog) -> list[dict[str, Any]]:
     for event in log.events[:MAX_EVENT_ROWS]:
         fields = {k: v for k, v in event.items() if k not in ("t", "kind")}
         text = describe_event(event["kind"], fields)[len(event["kind"]):].strip()
-        rows.append({"t": event["t"], "kind": event["kind"], "text": text, "class": _EVENT_CLASSES.get(event["kind"], "")})
+        rows.append({"t": event["t"], "kind": event["kind"], "text": text,
+                     "class": _EVENT_CLASSES.get(event["kind"], "")})
     return rows
 
 
