@@ -182,3 +182,20 @@ def test_python_api_runs_with_overrides_and_returns_the_log(tmp_path, monkeypatc
     assert quiet.log_path is None and len(list(Path("runs").glob("*"))) == 1
     named = marsupial.run("good.yaml", log=tmp_path / "named.mcap")
     assert named.log_path == tmp_path / "named.mcap" and named.log_path.is_file()
+
+
+def test_phases_last_until_the_next_phase_or_the_outcome():
+    from marsupial.trees.report.run import phase_rows
+
+    events = [
+        {"t": 0.0, "kind": "run_start"},
+        {"t": 1.0, "kind": "state_change", "node": "contact", "phase": "authorized"},
+        {"t": 2.5, "kind": "state_change", "node": "contact", "phase": "approach"},
+        {"t": 3.0, "kind": "state_change", "node": "land", "state": "descending"},
+        {"t": 4.0, "kind": "outcome", "node": "contact", "status": "SUCCESS"},
+        {"t": 4.5, "kind": "state_change", "node": "land", "status": "RUNNING"},  # no phase: changes nothing
+    ]
+    assert phase_rows(events, end=6.0) == [
+        {"name": "contact", "intervals": [(1.0, 2.5, "authorized"), (2.5, 4.0, "approach")]},
+        {"name": "land", "intervals": [(3.0, 6.0, "descending")]},
+    ]

@@ -21,8 +21,9 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch, Polygon
+from matplotlib.ticker import MaxNLocator
 
-__all__ = ["STATUS_COLOURS", "histograms", "map_svg", "metric_svgs", "outcome_svg", "timeline_svg"]
+__all__ = ["STATUS_COLOURS", "histograms", "map_svg", "metric_svgs", "outcome_svg", "phases_svg", "timeline_svg"]
 
 #: behaviour-tree status -> bar colour in the timeline (IDLE draws nothing)
 STATUS_COLOURS = {"RUNNING": "#f0a500", "SUCCESS": "#2e9d4f", "FAILURE": "#d1343b"}
@@ -191,6 +192,33 @@ def timeline_svg(
     return _svg(fig, "behaviour-tree timeline: one row per node, coloured by status over simulated time")
 
 
+@_styled
+def phases_svg(rows: Sequence[Mapping[str, Any]], end: float) -> str:
+    """The phases skills went through (docking phases, landing states): ``{"name", "intervals": [(a, b, phase)]}``.
+
+    One row per node; each phase a bar (colours cycling along the row) labelled with its name where
+    the label fits (the events table lists every phase).
+    """
+    fig = _figure(9.5, 0.8 + 0.32 * len(rows))
+    ax = fig.add_subplot()
+    points_per_s = 560.0 / max(end, 1e-3)  # about the axes' width in pt over the run
+    for row, node in enumerate(rows):
+        for index, (a, b, phase) in enumerate(node["intervals"]):
+            ax.broken_barh([(a, max(b - a, end * 4e-3))], (row - 0.4, 0.8), facecolors=robot_colour(index),
+                           alpha=0.75, edgecolor="white")
+            if (b - a) * points_per_s > 4.3 * len(phase) + 6:
+                ax.text(a + (b - a) / 2, row, phase, ha="center", va="center", fontsize=7, color="white",
+                        clip_on=True, parse_math=False)
+    ax.set_yticks(range(len(rows)), [str(node["name"]) for node in rows])
+    for label in ax.get_yticklabels():
+        label.set_parse_math(False)
+    ax.set_xlim(0, max(end, 1e-3))
+    ax.set_ylim(len(rows) - 0.5, -0.5)
+    ax.set_xlabel("simulated time (s)")
+    ax.grid(True, axis="x", lw=0.3, alpha=0.6)
+    return _svg(fig, "phases reported by the skills over simulated time")
+
+
 # ------------------------------------------------------------------ metrics
 @_styled
 def metric_svgs(series: Mapping[str, Mapping[str, tuple[np.ndarray, np.ndarray]]]) -> list[tuple[str, str]]:
@@ -226,6 +254,7 @@ def outcome_svg(outcomes: Mapping[str, int]) -> str:
     for label in ax.get_xticklabels():
         label.set_parse_math(False)
     ax.set_ylabel("trials")
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_title("outcomes")
     return _svg(fig, "bar chart of trial outcomes")
 
@@ -243,5 +272,6 @@ def histograms(values: Mapping[str, Sequence[float]]) -> list[tuple[str, str]]:
         ax.hist(finite, bins=min(20, max(5, len(finite) // 2)), color="#4a7ab5", edgecolor="white")
         ax.set_title(f"{name} (n={len(finite)})", parse_math=False)
         ax.set_ylabel("trials")
+        ax.yaxis.set_major_locator(MaxNLocator(integer=True))
         out.append((name, _svg(fig, f"histogram of {name} over the trials")))
     return out

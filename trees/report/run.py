@@ -24,7 +24,7 @@ from ..recorder import IMAGE_SCHEMA, describe_event
 from ..replay import RunLog, TreeSnapshot
 from . import plots
 
-__all__ = ["IMAGES_PER_CAMERA", "MAX_EVENT_ROWS", "run_context", "tree_rows"]
+__all__ = ["IMAGES_PER_CAMERA", "MAX_EVENT_ROWS", "phase_rows", "run_context", "tree_rows"]
 
 MAX_EVENT_ROWS = 2000  # events listed in the table (a note says how many more there were)
 IMAGES_PER_CAMERA = 6  # frames shown per camera, evenly spread over the run
@@ -71,6 +71,27 @@ def tree_rows(snapshots: list[TreeSnapshot], end: float) -> list[dict[str, Any]]
             intervals.append((since, max(end, since), current))
         rows.append({"uid": uid, "name": names[uid], "depth": depths.get(uid, 0), "intervals": intervals})
     return rows
+
+
+def phase_rows(events: list[dict[str, Any]], end: float) -> list[dict[str, Any]]:
+    """The phases skills report (``state_change`` events with a ``phase`` or ``state``), one row per node.
+
+    ``{"name", "intervals": [(start s, end s, phase)]}``: a phase lasts until
+    the node's next phase, its ``outcome`` event, or ``end`` (s).
+    """
+    rows: dict[str, list[list[Any]]] = {}
+    for event in events:
+        node = event.get("node")
+        if node is None:
+            continue
+        phase = event.get("phase", event.get("state")) if event["kind"] == "state_change" else None
+        spans = rows.get(node)
+        if spans and spans[-1][1] is None and (phase is not None or event["kind"] == "outcome"):
+            spans[-1][1] = event["t"]
+        if phase is not None:
+            rows.setdefault(node, []).append([event["t"], None, str(phase)])
+    return [{"name": node, "intervals": [(a, end if b is None else b, phase) for a, b, phase in spans]}
+            for node, spans in rows.items()]
 
 
 def _description(mission_text: str) -> str:
@@ -150,6 +171,7 @@ def run_context(log: RunLog, links: Mapping[str, str] | None = None) -> dict[str
     preemptions = [{"t": e["t"], "row": row_of.get(e["preempted"]), "event": e} for e in log.events_of("preemption")]
     operator = [{"t": e["t"], "command": e["command"]} for e in log.events_of("operator")]
     series, finals = _metrics(log)
+    phases = phase_rows(log.events, end)
     run_end = next((e for e in reversed(log.events) if e["kind"] == "run_end"), {})
     errors = [e for e in log.events if e["kind"] == "error"]
     estimate_errors = {}
@@ -175,6 +197,7 @@ def run_context(log: RunLog, links: Mapping[str, str] | None = None) -> dict[str
         "estimate_errors": estimate_errors,
         "map_svg": plots.map_svg(scene, paths),
         "timeline_svg": plots.timeline_svg(rows, end, preemptions, operator) if rows else None,
+        "phases_svg": plots.phases_svg(phases, end) if phases else None,
         "nodes": rows,
         "preemptions": preemptions,
         "operator": log.events_of("operator"),
