@@ -336,8 +336,9 @@ def run_mission(
     log = Path(log_path) if log_path is not None else None
     if log is not None:
         log.parent.mkdir(parents=True, exist_ok=True)
-    metadata = _metadata(mission, seed, until)
-    recorder = Recorder(log, metadata, record_images=record_images, sinks=sinks) if log or sinks else None
+    recorder = None
+    if log is not None or sinks:
+        recorder = Recorder(log, _metadata(mission, seed, until), record_images=record_images, sinks=sinks)
     context.recorder = recorder
     if recorder is not None:
         recorder.time_source = lambda: world.now  # the log ends at the time the run reached, however it ends
