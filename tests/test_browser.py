@@ -12,8 +12,10 @@ import shutil
 from pathlib import Path
 
 import pytest
-from report_fixtures import SCRIPT_NODE, fake_campaign, hostile_log
+from click.testing import CliRunner
+from report_fixtures import HOSTILE, SCRIPT_NODE, fake_campaign
 
+from marsupial.trees.cli import cli
 from marsupial.trees.report import write_report
 
 playwright = pytest.importorskip("playwright.sync_api", reason="playwright is not installed (pip install '.[test]')")
@@ -53,8 +55,17 @@ def visible_box(page, selector: str) -> dict:
     return box
 
 
-def test_run_report_renders_in_chromium(browser, tmp_path):
-    page_path = write_report(hostile_log(tmp_path), tmp_path / "run.html")
+def test_first_run_and_its_report_render_in_chromium(browser, tmp_path, monkeypatch):
+    """What a new user does: ``marsupial run`` (logs by default, prints the report command), then that command."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "hostile.yaml").write_text(HOSTILE)
+    ran = CliRunner().invoke(cli, ["run", "hostile.yaml", "-q"])
+    assert ran.exit_code == 0, ran.output
+    command = ran.output.splitlines()[-1].removeprefix("report: ").split()
+    assert command[:2] == ["marsupial", "report"] and Path(command[2]).parent == Path("runs")
+    reported = CliRunner().invoke(cli, command[1:])
+    assert reported.exit_code == 0, reported.output
+    page_path = Path(reported.output.strip().removeprefix("report: "))
     page, problems, dialogs = open_page(browser, page_path, tmp_path / "run.png")
     assert problems == [] and dialogs == []
     visible_box(page, "#map svg")
