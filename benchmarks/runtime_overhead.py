@@ -17,9 +17,12 @@ Two measurements, pinned to one CPU core:
    mission-like tree with the recorder on.
 2. Recorder overhead of a real run: ``run_mission`` of a 60 s mission with a
    ``bebop2`` flying a square and a ``summit_xl`` driving one (cheap skills,
-   no cameras: the recorder's worst case), with and without a log. The share
-   is the wall time spent inside the recorder's calls over the run's wall
-   time. Target: <= 10 %.
+   no cameras: the recorder's worst case), with and without a log, and with
+   the log plus the live Foxglove server (``--live``; no client connected,
+   not paced). The share is the wall time spent inside the recorder's calls
+   (every sink's writes included) over the run's wall time. Target: <= 10 %.
+3. The default mission (``marsupial run`` without arguments, which now logs
+   by default) with and without its log: real-time factors (not with --quick).
 
 Every figure is the best of several repetitions (other processes only slow
 a wall-clock benchmark down). Prints a table and writes the figures as JSON.
@@ -47,7 +50,9 @@ from pydantic import Field
 from rich.console import Console
 from rich.table import Table
 
+from marsupial.trees.cli import DEFAULT_MISSION
 from marsupial.trees.compiler import compile_mission
+from marsupial.trees.live import LiveSink
 from marsupial.trees.mission import parse_mission
 from marsupial.trees.recorder import Recorder
 from marsupial.trees.runner import run_mission
@@ -171,30 +176,38 @@ def time_in_recorder() -> Iterator[list[float]]:
             setattr(Recorder, name, method)
 
 
-def recorder_share(seconds: float, repeats: int) -> dict[str, Any]:
-    """Wall time of a ``seconds``-long run with and without a log, and the share of it spent recording.
+def recorder_share(mission: str, seconds: float | None, repeats: int, live: bool = True) -> dict[str, Any]:
+    """Wall time of a ``seconds``-long run of ``mission`` (a name or path; ``None``: to its end) without a log,
+    with one, and with one and the live server (``live``); the share of it spent recording.
 
     The share is measured directly (time inside the recorder / the run's
     wall time, median of the repetitions), which other processes disturb far
     less than the difference of two wall times; both are reported.
     """
+    variants = ("none", "log", "log+live") if live else ("none", "log")
     with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "square.yaml"
-        path.write_text(RUN_MISSION)
-        walls: dict[bool, float] = {True: math.inf, False: math.inf}
-        shares, size = [], 0
+        walls = dict.fromkeys(variants, math.inf)
+        shares: dict[str, list[float]] = {v: [] for v in variants[1:]}
+        size = 0
         for _ in range(repeats):
-            for record in (False, True):
-                log = Path(tmp) / "square.mcap" if record else None
+            for variant in variants:
+                log = Path(tmp) / "run.mcap" if variant != "none" else None
+                sinks = [LiveSink(port=0)] if variant == "log+live" else []
                 with time_in_recorder() as spent:
-                    result = run_mission(str(path), log_path=log, until=seconds, progress=False)
-                walls[record] = min(walls[record], result.wall_time)
+                    result = run_mission(mission, log_path=log, until=seconds, progress=False, sinks=sinks)
+                walls[variant] = min(walls[variant], result.wall_time)
                 if log is not None:
-                    shares.append(spent[0] / result.wall_time)
+                    shares[variant].append(spent[0] / result.wall_time)
                     size = log.stat().st_size
-    return {"sim_seconds": seconds, "wall_without_log_s": walls[False], "wall_with_log_s": walls[True],
-            "real_time_factor_with_log": seconds / walls[True], "recorder_share": statistics.median(shares),
-            "recorder_share_from_wall_times": (walls[True] - walls[False]) / walls[True], "log_bytes": size}
+    out = {"sim_seconds": result.sim_time, "wall_without_log_s": walls["none"], "wall_with_log_s": walls["log"],
+           "real_time_factor_without_log": result.sim_time / walls["none"],
+           "real_time_factor_with_log": result.sim_time / walls["log"],
+           "recorder_share": statistics.median(shares["log"]),
+           "recorder_share_from_wall_times": (walls["log"] - walls["none"]) / walls["log"], "log_bytes": size}
+    if live:
+        out.update(wall_with_log_and_live_s=walls["log+live"],
+                   recorder_share_with_live=statistics.median(shares["log+live"]))
+    return out
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
@@ -215,7 +228,13 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         for shape in ("mission-like", "all-ticked")
         for record in (True, False)
     ]
-    report["run"] = recorder_share(20.0 if args.quick else 60.0, repeats)
+    with tempfile.TemporaryDirectory() as tmp:
+        square = Path(tmp) / "square.yaml"
+        square.write_text(RUN_MISSION)
+        report["run"] = recorder_share(str(square), 20.0 if args.quick else 60.0, repeats)
+    if not args.quick:
+        report["default_mission"] = {"mission": DEFAULT_MISSION,
+                                     **recorder_share(DEFAULT_MISSION, None, 2, live=False)}
 
     table = Table(title="marsupial runtime overhead (one core)", title_justify="left")
     for column in ("measurement", "value", "target"):
@@ -231,6 +250,13 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     table.add_row("recorder share of the run's wall time (time inside the recorder)",
                   f"{run['recorder_share']:.1%}", f"<= {TARGET_RECORDER_SHARE:.0%}")
     table.add_row("  same, from the two best wall times (noisy)", f"{run['recorder_share_from_wall_times']:.1%}", "")
+    table.add_row("recorder share with the log and the live Foxglove server (--live, no client)",
+                  f"{run['recorder_share_with_live']:.1%}", f"<= {TARGET_RECORDER_SHARE:.0%}")
+    default = report.get("default_mission")
+    if default is not None:
+        table.add_row(f"default mission {default['mission']}: RTF without / with its log (now the default)",
+                      f"{default['real_time_factor_without_log']:.2f}x / {default['real_time_factor_with_log']:.2f}x "
+                      f"(recorder share {default['recorder_share']:.1%})", "")
     Console().print(table)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(report, indent=2))

@@ -32,6 +32,12 @@ tree:
 """
 
 
+@pytest.fixture(autouse=True)
+def in_tmp_folder(tmp_path, monkeypatch):
+    """Every command runs in the test's folder, so default logs (``runs/``) land there, not in the repository."""
+    monkeypatch.chdir(tmp_path)
+
+
 def invoke(*args):
     return CliRunner().invoke(cli, [str(a) for a in args], env={"COLUMNS": "200"})
 

@@ -284,7 +284,7 @@ SCRIPT = textwrap.dedent(
     path, mode = sys.argv[1], sys.argv[2]
     with Recorder(path, {"mission": "endings", "seed": 1}, chunk_size=4096) as rec:
         rec.install_signal_handlers()
-        writer = rec._writer
+        writer = rec._sinks[0].writer
         if mode == "signal_in_write":  # SIGINT arrives in the middle of a message write
             real_add = writer.add_message
             def add_message(*args, **kwargs):

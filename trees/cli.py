@@ -1,4 +1,4 @@
-"""The ``marsupial`` command: run, draw, export, list, validate, replay, verify and campaign missions.
+"""The ``marsupial`` command: run, draw, export, list, validate, replay, report, verify and campaign missions.
 
 Exit codes: 0 success; 1 mission failure (or a verification mismatch);
 2 bad input (mission errors, unknown names, missing files — printed as one
@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import shlex
 import shutil
 import sys
 import tempfile
@@ -87,6 +88,13 @@ def _positive_time(ctx: click.Context, param: click.Parameter, value: float | No
     return value
 
 
+def _positive_speed(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
+    """Check --speed: a finite factor > 0 of real time."""
+    if value is not None and not (value > 0 and value < float("inf")):
+        raise click.BadParameter(f"{value} is not a speed; expected a finite factor of real time > 0 (e.g. 1, 4)")
+    return value
+
+
 _set_option = click.option("--set", "sets", multiple=True, metavar="KEY=VALUE", help="Override a mission value (params.X, world.seed, run.until …).")
 
 
@@ -99,29 +107,74 @@ def cli() -> None:
 @cli.command()
 @click.argument("mission", required=False, default=DEFAULT_MISSION)
 @click.option("--seed", type=SEED, help="World seed, an integer >= 0 (default: the mission's world.seed).")
-@click.option("--log", "log_path", type=click.Path(dir_okay=False), help="Write the run to this MCAP file.")
+@click.option("--log", "log_path", type=click.Path(dir_okay=False),
+              help="Write the run to this MCAP file (default: runs/<mission>-<UTC time>.mcap).")
+@click.option("--no-log", is_flag=True, help="Write no log file.")
 @click.option("--until", type=float, callback=_positive_time, help="Time limit in simulated seconds (> 0).")
 @click.option("--gui", is_flag=True, help="Open the pybullet GUI (paced to real time).")
 @_set_option
 @click.option("--operator", is_flag=True, help="Read operator commands from stdin ('command [reason]' per line); real-time pace.")
 @click.option("--record-images", is_flag=True, help="Record camera frames that skills log.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress line and no summary table.")
-def run(mission: str, seed: int | None, log_path: str | None, until: float | None, gui: bool,
-        sets: tuple[str, ...], operator: bool, record_images: bool, quiet: bool) -> None:
-    """Run MISSION (a name or a .yaml path; default: landing_circular, a landing on a moving UGV)."""
-    from .runner import run_mission
+@click.option("--live", is_flag=True, help="Serve the run to Foxglove over WebSocket while it runs (real-time pace).")
+@click.option("--host", help="Address the live server binds to (default: 127.0.0.1, this machine only).")
+@click.option("--port", type=click.IntRange(0, 65535),
+              help="Port of the live server (default: 8765; 0: any free port).")
+@click.option("--speed", type=float, callback=_positive_speed,
+              help="Pace the run to X times real time (default: 1 with --live/--gui/--operator, else at full speed).")
+def run(mission: str, seed: int | None, log_path: str | None, no_log: bool, until: float | None, gui: bool,
+        sets: tuple[str, ...], operator: bool, record_images: bool, quiet: bool, live: bool, host: str | None,
+        port: int | None, speed: float | None) -> None:
+    """Run MISSION (a name or a .yaml path; default: landing_circular, a landing on a moving UGV).
 
+    The run is logged to runs/<mission>-<UTC time>.mcap unless --log FILE or
+    --no-log; the path and the `marsupial report` command for it are printed
+    at the end.
+    """
+    from .live import DEFAULT_HOST, DEFAULT_PORT
+    from .mission import load_mission
+    from .runner import default_log_path, run_mission
+
+    if no_log and log_path is not None:
+        raise click.UsageError("--log and --no-log exclude each other")
+    if not live and (host is not None or port is not None):
+        raise click.UsageError("--host and --port set up the live server: add --live")
+    sinks = []
     try:
         with bad_input():
+            loaded = load_mission(mission, _assignments(sets, "--set"))
+            log = None if no_log else Path(log_path) if log_path is not None else default_log_path(loaded.name)
+            if live:
+                sinks.append(_live_sink(host or DEFAULT_HOST, DEFAULT_PORT if port is None else port))
             result = run_mission(
-                mission, seed=seed, log_path=log_path, until=until, gui=gui, progress=not quiet,
-                operator_stdin=operator, overrides=_assignments(sets, "--set"), record_images=record_images,
+                loaded, seed=seed, log_path=log, until=until, gui=gui, progress=not quiet, operator_stdin=operator,
+                record_images=record_images, pace=speed if speed is not None else 1.0 if live else None, sinks=sinks,
             )
     except KeyboardInterrupt:  # before the run loop took over the signal
         sys.exit(130)
+    finally:
+        for sink in sinks:
+            sink.close()
     if result.outcome == "error":
         _err.print(result.message, highlight=False, markup=False)
+    if result.log_path is not None:
+        click.echo(f"log: {result.log_path}\nreport: marsupial report {shlex.quote(str(result.log_path))}")
     sys.exit(result.exit_code)
+
+
+def _live_sink(host: str, port: int) -> Any:
+    """Start the live Foxglove server and say where it listens (and that it is open to the network if so)."""
+    from .live import DEFAULT_HOST, LiveSink
+
+    try:
+        sink = LiveSink(host, port)
+    except RuntimeError as err:  # the SDK raises it for a port in use or an address it cannot bind
+        raise MissionError(f"--live: cannot serve on {host}:{port} ({err})",
+                           expected="a free port (--port) on an address of this machine (--host)") from None
+    where = "this machine only" if host in (DEFAULT_HOST, "localhost", "::1") else f"open to the network on {host}"
+    click.echo(f"live: Foxglove WebSocket on {sink.url} ({where}); in Foxglove: Open connection > Foxglove WebSocket")
+    sys.stdout.flush()
+    return sink
 
 
 @cli.command()
@@ -252,6 +305,26 @@ def replay(log: str) -> None:
     click.echo(f"# {meta.get('mission_name', '?')} seed={meta.get('seed', '?')} outcome={run_log.outcome} "
                f"sim_time={run_log.sim_time}")
     click.echo(format_timeline(run_log), nl=False)
+
+
+@cli.command()
+@click.argument("source", type=click.Path())
+@click.option("--output", "-o", type=click.Path(dir_okay=False),
+              help="The page to write (default: LOG.html next to a log, CAMPAIGN_DIR/report.html for a campaign).")
+def report(source: str, output: str | None) -> None:
+    """Write the HTML report of a run log (SOURCE.mcap) or of a campaign folder (SOURCE = its --out).
+
+    One self-contained page (no scripts, no network): summary and outcome,
+    top-down map with true and estimated paths, behaviour-tree timeline,
+    events and operator commands, metric plots, recorded images. A campaign
+    page shows the success rate with its Wilson interval, the outcomes,
+    histograms, and links to a report of every kept trial log.
+    """
+    from .report import write_report
+
+    with bad_input():
+        page = write_report(source, output)
+    click.echo(f"report: {page}")
 
 
 @cli.command()

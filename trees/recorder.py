@@ -1,4 +1,4 @@
-"""The run recorder: one MCAP file per run, JSON messages with JSON Schemas, readable in Foxglove.
+"""The run recorder: one MCAP file per run and/or a live Foxglove server, JSON messages with JSON Schemas.
 
 Channels (see ``docs/logs.md`` for every field):
 
@@ -40,6 +40,10 @@ The file is a complete MCAP (summary, indexes, CRCs) however the run ends:
 or SIGTERM (after :meth:`Recorder.install_signal_handlers`), or an
 interpreter exit that skipped the close. Only a hard kill (SIGKILL) leaves
 a truncated file, which loses at most the chunk in progress (``chunk_size``).
+
+Every message is built and encoded once and handed to each sink
+(:mod:`marsupial.trees.sinks`): the MCAP file of ``path``, and any others
+given, e.g. the live server of :mod:`marsupial.trees.live`.
 """
 
 from __future__ import annotations
@@ -59,8 +63,6 @@ from types import FrameType
 from typing import TYPE_CHECKING, Any
 
 import py_trees
-from mcap.writer import CompressionType, Writer
-
 import marsupial
 
 from .btxml import STATUS_NAMES, to_btcpp_xml, walk
@@ -75,6 +77,7 @@ from .messages import (
     xyz,
     xyzw,
 )
+from .sinks import McapSink, Sink
 
 if TYPE_CHECKING:
     from marsupial.world.world import World
@@ -180,7 +183,7 @@ class Recorder:
         # closed here: outcome taken from run_end, or "error"/"interrupted"/"terminated"
 
     Args:
-        path: the ``.mcap`` file to write (replaced if it exists).
+        path: the ``.mcap`` file to write (replaced if it exists); ``None``: no file (``sinks`` only).
         metadata: run metadata (``mission`` text, ``mission_name``, ``seed``,
             ``command_line`` …); ``version`` (package version) and
             ``command_line`` (``sys.argv``) are filled in when absent. Values
@@ -188,6 +191,8 @@ class Recorder:
         record_images: write :meth:`log_image` frames (off: calls return at once).
         chunk_size: uncompressed bytes per zstd chunk; a chunk reaches the disk
             when full, so this bounds what a hard kill can lose.
+        sinks: more outputs for the same messages (:class:`~marsupial.trees.sinks.Sink`),
+            e.g. a :class:`~marsupial.trees.live.LiveSink`; closed with the recorder.
 
     After :meth:`close`, further log calls are ignored (a run ended by a
     signal may still unwind through code that logs).
@@ -195,20 +200,20 @@ class Recorder:
 
     def __init__(
         self,
-        path: str | Path,
+        path: str | Path | None,
         metadata: Mapping[str, Any] | None = None,
         *,
         record_images: bool = False,
         chunk_size: int = 256 * 1024,
+        sinks: Sequence[Sink] = (),
     ):
-        self.path = Path(path)
+        self.path = Path(path) if path is not None else None
         self.record_images = bool(record_images)
         self.t = 0.0  # sim time (s) of the latest message
         #: the run's clock (sim s); when set, the closing ``run_end`` and ``outcome`` carry the time the run reached
         self.time_source: Callable[[], float] | None = None
         self._last_ns = 0
-        self._schema_ids: dict[str, int] = {}
-        self._channel_ids: dict[str, int] = {}
+        self._channels: dict[str, list[Any]] = {}  # topic -> one channel handle per sink
         self._tree: _TreeTrack | None = None
         self._run_end: dict[str, Any] | None = None
         self._closing = False
@@ -219,15 +224,9 @@ class Recorder:
 
         info = {"version": marsupial.__version__, "command_line": shlex.join(sys.argv)}
         info.update(metadata or {})
-        self._file = open(self.path, "wb")  # noqa: SIM115 - closed by close()
-        self._writer = Writer(
-            self._file,
-            chunk_size=int(chunk_size),
-            compression=CompressionType.ZSTD,
-            enable_data_crcs=True,
-        )
-        self._writer.start(profile="", library=f"marsupial {marsupial.__version__}")
-        self._writer.add_metadata("marsupial", {str(k): _metadata_text(v) for k, v in info.items()})
+        self._sinks: list[Sink] = ([McapSink(self.path, chunk_size)] if self.path is not None else []) + list(sinks)
+        for sink in self._sinks:
+            sink.metadata("marsupial", {str(k): _metadata_text(v) for k, v in info.items()})
         atexit.register(self._close_at_exit)
 
     # ------------------------------------------------------------ lifecycle
@@ -274,11 +273,14 @@ class Recorder:
             if self._run_end is None:
                 self._write_event(self.t, "run_end", {"outcome": outcome, "sim_time": self.t})
             record = {"outcome": outcome, "sim_time": self.t, **details}
-            self._writer.add_metadata("outcome", {str(k): _metadata_text(v) for k, v in record.items()})
-            self._writer.finish()
+            for sink in self._sinks:
+                sink.metadata("outcome", {str(k): _metadata_text(v) for k, v in record.items()})
         finally:
-            self._file.close()
-            self._closed = True
+            try:
+                for sink in self._sinks:
+                    sink.close()
+            finally:
+                self._closed = True
             atexit.unregister(self._close_at_exit)
             self._restore_signal_handlers()
         if self._pending is not None:  # a signal came in during a normal close: act on it now
@@ -334,24 +336,20 @@ class Recorder:
         raise self._signal_exception(signum)  # type: ignore[arg-type]
 
     # ------------------------------------------------------------ writing
-    def _channel(self, topic: str, schema_name: str) -> int:
-        channel = self._channel_ids.get(topic)
-        if channel is None:
-            schema = self._schema_ids.get(schema_name)
-            if schema is None:
-                data = json.dumps(SCHEMAS[schema_name], separators=(",", ":")).encode()
-                schema = self._schema_ids[schema_name] = self._writer.register_schema(
-                    schema_name, "jsonschema", data
-                )
-            channel = self._channel_ids[topic] = self._writer.register_channel(topic, "json", schema)
-        return channel
+    def _channel(self, topic: str, schema_name: str) -> list[Any]:
+        channels = self._channels.get(topic)
+        if channels is None:
+            schema = json.dumps(SCHEMAS[schema_name], separators=(",", ":")).encode()
+            channels = self._channels[topic] = [sink.channel(topic, schema_name, schema) for sink in self._sinks]
+        return channels
 
     def _write(self, topic: str, schema_name: str, ns: int, payload: dict[str, Any]) -> None:
-        """Append one message; ``ns`` must not be earlier than the previous message's."""
+        """Send one message to every sink; ``ns`` must not be earlier than the previous message's."""
         data = encode(payload)
         self._busy = True
         try:
-            self._writer.add_message(self._channel(topic, schema_name), ns, data, ns)
+            for sink, channel in zip(self._sinks, self._channel(topic, schema_name)):
+                sink.write(channel, ns, data)
         finally:
             self._busy = False
         if self._pending is not None and not self._closing:

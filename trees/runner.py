@@ -25,14 +25,16 @@ The log is a valid MCAP however the run ends.
 from __future__ import annotations
 
 import contextlib
+import datetime
 import json
 import math
+import re
 import signal
 import sys
 import threading
 import time
 import traceback
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import FrameType
@@ -56,12 +58,14 @@ from .errors import MissionError, check_seed, one_of, suggest
 from .mission import Mission, load_mission
 from .operator import CONTROL_COMMANDS, OperatorChannel
 from .recorder import Recorder, Terminated
+from .sinks import Sink
 from .skill import RunContext
 
 #: outcome -> process exit code
 EXIT_CODES = {"success": 0, "interrupted": 130, "terminated": 143}
 METRIC_PERIOD = 1.0  # s of simulated time between battery samples
 POSE_PERIOD = 0.2  # s of simulated time between recorded robot poses (5 Hz keeps the log's cost low)
+RUNS_DIR = Path("runs")  # where runs log by default, relative to the current folder
 
 
 @dataclass
@@ -243,6 +247,21 @@ def summary_table(result: RunResult) -> Table:
 
 
 # ------------------------------------------------------------------ running
+def default_log_path(mission_name: str, folder: str | Path = RUNS_DIR) -> Path:
+    """``<folder>/<mission>-<UTC time>.mcap`` (``-2``, ``-3`` … appended if that file exists).
+
+    The wall clock names the file and nothing else: the run itself only ever
+    sees simulated time.
+    """
+    stamp = datetime.datetime.now(datetime.timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+    stem = f"{re.sub(r'[^A-Za-z0-9_.-]+', '_', mission_name).strip('.') or 'mission'}-{stamp}"
+    path, n = Path(folder) / f"{stem}.mcap", 1
+    while path.exists():
+        n += 1
+        path = Path(folder) / f"{stem}-{n}.mcap"
+    return path
+
+
 def _metadata(mission: Mission, seed: int, until: float | None) -> dict[str, Any]:
     return {
         "mission": mission.text,
@@ -267,6 +286,8 @@ def run_mission(
     record_images: bool = False,
     operator: OperatorChannel | None = None,
     console: Console | None = None,
+    pace: float | None = None,
+    sinks: Sequence[Sink] = (),
 ) -> RunResult:
     """Run ``mission`` (a :class:`Mission`, or a name/path loaded with ``overrides``) to its end.
 
@@ -282,6 +303,10 @@ def run_mission(
         operator: the operator channel to use (default: one with the mission's timeline);
             its :meth:`~OperatorChannel.say` is the Python API for live commands.
         console: where progress and the summary go (default: stdout).
+        pace: simulated seconds per wall-clock second to hold the run to (``1.0``: real time); default:
+            as fast as possible, or real time with ``gui`` or ``operator_stdin``.
+        sinks: more outputs for the recorder's messages besides ``log_path`` (e.g. a live
+            :class:`~marsupial.trees.live.LiveSink`), closed at the end of the run.
 
     Raises :class:`MissionError` for bad input, before the log file is created.
     """
@@ -291,6 +316,11 @@ def run_mission(
     seed = spec.world.seed if seed is None else check_seed(seed)
     if until is not None and not (isinstance(until, (int, float)) and not isinstance(until, bool) and 0 < until < math.inf):
         raise MissionError(f"until {until!r} is not a time limit", expected="a finite number of simulated seconds > 0")
+    if pace is not None and not (isinstance(pace, (int, float)) and not isinstance(pace, bool) and 0 < pace < math.inf):
+        raise MissionError(f"speed {pace!r} is not a pace",
+                           expected="a finite number of simulated seconds per second > 0")
+    if pace is None and (gui or operator_stdin):
+        pace = 1.0  # a person watches or types
     until = spec.run.until if until is None else float(until)
     channel = operator if operator is not None else OperatorChannel((e.at, e.say, e.why) for e in spec.operator)
     console = console or Console()
@@ -306,7 +336,9 @@ def run_mission(
     log = Path(log_path) if log_path is not None else None
     if log is not None:
         log.parent.mkdir(parents=True, exist_ok=True)
-    recorder = Recorder(log, _metadata(mission, seed, until), record_images=record_images) if log else None
+    recorder = None
+    if log is not None or sinks:
+        recorder = Recorder(log, _metadata(mission, seed, until), record_images=record_images, sinks=sinks)
     context.recorder = recorder
     if recorder is not None:
         recorder.time_source = lambda: world.now  # the log ends at the time the run reached, however it ends
@@ -316,7 +348,7 @@ def run_mission(
     started = time.perf_counter()
     try:
         with recorder if recorder is not None else contextlib.nullcontext(), _signals_end_the_run(recorder):
-            outcome = _loop(mission, tree, world, context, until, gui or operator_stdin, display, started, ticks)
+            outcome = _loop(mission, tree, world, context, until, pace, display, started, ticks)
             if tree.root.status == Status.RUNNING:
                 tree.root.stop(Status.INVALID)  # skills still running leave their robots safe
             context.event("run_end", outcome=outcome, sim_time=world.now, ticks=ticks.n)
@@ -365,15 +397,16 @@ def _loop(
     world: World,
     context: RunContext,
     until: float | None,
-    real_time: bool,
+    pace: float | None,
     display: _Progress,
     started: float,
     ticks: _TickCount,
 ) -> str:
     """Tick until the root finishes, the time limit or an abort; returns the outcome (``ticks`` counts the ticks).
 
-    ``real_time`` paces the loop to the wall clock (GUI or live operator: a
-    person watches or types); the simulation itself never reads the clock.
+    ``pace`` (sim s per wall s) holds the loop back to the wall clock (GUI,
+    live operator or live view: a person watches or types); the simulation
+    itself never reads the clock.
     """
     recorder, channel, arbiter = context.recorder, context.operator, context.arbiter
     assert channel is not None
@@ -425,6 +458,6 @@ def _loop(
             return "time_limit"
         world.step(period)
         wall = time.perf_counter() - started
-        if real_time and world.now > wall:
-            time.sleep(world.now - wall)
+        if pace is not None and world.now > wall * pace:
+            time.sleep(world.now / pace - wall)
         display.update(world, tree, wall, paused)

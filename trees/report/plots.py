@@ -1,0 +1,277 @@
+"""The report's figures as inline SVG (matplotlib, no pyplot: safe in notebooks and without a display).
+
+Every function returns one ``<svg ...>`` element as text. Text stays text
+(``svg.fonttype: none``; matplotlib escapes it as XML), so names from a
+mission are searchable and can never become markup; mathtext is off for every
+label that comes from a mission (``parse_math=False``). Output is
+deterministic (fixed hash salt, no date). Units: metres, simulated seconds.
+"""
+
+from __future__ import annotations
+
+import functools
+import io
+import math
+import re
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, TypeVar
+
+import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Circle, Patch, Polygon
+from matplotlib.ticker import MaxNLocator
+
+__all__ = ["STATUS_COLOURS", "histograms", "map_svg", "metric_svgs", "outcome_svg", "phases_svg", "timeline_svg"]
+
+#: behaviour-tree status -> bar colour in the timeline (IDLE draws nothing)
+STATUS_COLOURS = {"RUNNING": "#f0a500", "SUCCESS": "#2e9d4f", "FAILURE": "#d1343b"}
+_RC = {"svg.fonttype": "none", "svg.hashsalt": "marsupial", "font.size": 9, "axes.titlesize": 10,
+       "axes.spines.top": False, "axes.spines.right": False}
+_ROBOT_COLOURS = ("#1f77b4", "#9467bd", "#ff7f0e", "#17becf", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22")
+_SVG_SIZE = re.compile(r'<svg([^>]*?) width="[^"]*" height="[^"]*"')
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+
+def _styled(function: _F) -> _F:
+    """Build the figures of ``function`` under the report's matplotlib settings (not the user's)."""
+
+    @functools.wraps(function)
+    def styled(*args: Any, **kwargs: Any) -> Any:
+        with matplotlib.rc_context(_RC):
+            return function(*args, **kwargs)
+
+    return styled  # type: ignore[return-value]
+
+
+def _svg(fig: Figure, label: str) -> str:
+    """The figure as one ``<svg>`` element scaled to its container, with an accessible ``label``."""
+    buffer = io.StringIO()
+    fig.savefig(buffer, format="svg", metadata={"Date": None}, bbox_inches="tight")
+    text = buffer.getvalue()
+    text = text[text.index("<svg"):]
+    escaped = label.replace("&", "&amp;").replace('"', "&quot;").replace("<", "&lt;")
+    return _SVG_SIZE.sub(rf'<svg\1 role="img" aria-label="{escaped}" style="width:100%;height:auto"', text, count=1)
+
+
+def _figure(width: float, height: float) -> Figure:
+    return Figure(figsize=(width, height), layout="constrained")
+
+
+def robot_colour(index: int) -> str:
+    """The colour of the ``index``-th robot (same in every figure)."""
+    return _ROBOT_COLOURS[index % len(_ROBOT_COLOURS)]
+
+
+# ------------------------------------------------------------------ map
+def _footprint(kind: str, primitive: Mapping[str, Any]) -> tuple[Any, list[float], list[float]]:
+    """A scene primitive seen from above: a matplotlib patch and its x, y extent (m)."""
+    p, size = primitive["pose"]["position"], primitive["size"]
+    q = primitive["pose"]["orientation"]
+    colour = primitive.get("color", {})
+    face = (colour.get("r", 0.6), colour.get("g", 0.6), colour.get("b", 0.6), max(0.35, colour.get("a", 1.0)))
+    if kind == "cubes":
+        yaw = math.atan2(2 * (q["w"] * q["z"] + q["x"] * q["y"]), 1 - 2 * (q["y"] ** 2 + q["z"] ** 2))
+        c, s = math.cos(yaw), math.sin(yaw)
+        hx, hy = size["x"] / 2, size["y"] / 2
+        corners = [(p["x"] + c * dx - s * dy, p["y"] + s * dx + c * dy) for dx, dy in
+                   ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy))]
+        return Polygon(corners, closed=True, facecolor=face, edgecolor="#444", lw=0.5), *map(list, zip(*corners))
+    r = size["x"] / 2
+    return (Circle((p["x"], p["y"]), r, facecolor=face, edgecolor="#444", lw=0.5),
+            [p["x"] - r, p["x"] + r], [p["y"] - r, p["y"] + r])
+
+
+@_styled
+def map_svg(scene: Mapping[str, Any] | None, paths: Mapping[str, Mapping[str, np.ndarray]]) -> str:
+    """Top-down map (x-y, world frame, m): scene objects, and each robot's true and estimated path.
+
+    ``paths``: robot -> ``{"truth": (N, 3), "estimate": (M, 3)}`` (either may be missing).
+    The view is a square around the paths with a margin of 25 % (at least 3 m),
+    or around the scene objects (not the floor) when there are no paths.
+    """
+    fig = _figure(7.0, 6.0)
+    ax = fig.add_subplot()
+    xs: list[float] = []
+    ys: list[float] = []
+    for index, (robot, tracks) in enumerate(paths.items()):
+        colour = robot_colour(index)
+        truth, estimate = tracks.get("truth"), tracks.get("estimate")
+        if truth is not None and len(truth):
+            ax.plot(truth[:, 0], truth[:, 1], color=colour, lw=1.6, label=f"{robot} true")
+            ax.plot(*truth[0, :2], "o", color=colour, ms=5)
+            ax.plot(*truth[-1, :2], "s", color=colour, ms=5)
+            xs += list(truth[:, 0])
+            ys += list(truth[:, 1])
+        if estimate is not None and len(estimate):
+            ax.plot(estimate[:, 0], estimate[:, 1], color=colour, lw=1.1, ls="--", label=f"{robot} estimate")
+            xs += list(estimate[:, 0])
+            ys += list(estimate[:, 1])
+    has_paths = bool(xs)
+    floor = None
+    for entity in (scene or {}).get("entities", []):
+        if entity.get("id") == "floor":
+            floor = entity
+            continue
+        for kind in ("cubes", "cylinders", "spheres"):
+            for primitive in entity.get(kind, []):
+                patch, px, py = _footprint(kind, primitive)
+                ax.add_patch(patch)
+                if not has_paths:  # the objects set the view
+                    xs += px
+                    ys += py
+    if not xs:
+        xs, ys = [-1.0, 1.0], [-1.0, 1.0]
+    span = max(max(xs) - min(xs), max(ys) - min(ys), 1.0)
+    half = span / 2 + (max(0.25 * span, 3.0) if has_paths else 0.08 * span)
+    cx, cy = (max(xs) + min(xs)) / 2, (max(ys) + min(ys)) / 2
+    ax.set_xlim(cx - half, cx + half)
+    ax.set_ylim(cy - half, cy + half)
+    if floor is not None:
+        ax.set_facecolor("#f4f4f0")
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_xlabel("x (m, world)")
+    ax.set_ylabel("y (m, world)")
+    ax.grid(True, lw=0.3, alpha=0.5)
+    if paths:
+        legend = ax.legend(loc="best", fontsize=8, framealpha=0.8)
+        for text in legend.get_texts():
+            text.set_parse_math(False)
+    ax.set_title("true path (solid; ● start, ■ end) and onboard estimate (dashed)")
+    return _svg(fig, "top-down map of the scene with every robot's true and estimated path")
+
+
+# ------------------------------------------------------------------ tree timeline
+@_styled
+def timeline_svg(
+    rows: Sequence[Mapping[str, Any]],
+    end: float,
+    preemptions: Sequence[Mapping[str, Any]] = (),
+    operator: Sequence[Mapping[str, Any]] = (),
+) -> str:
+    """The behaviour-tree timeline: one row per node, bars coloured by status over simulated time.
+
+    ``rows``: ``{"name", "depth", "intervals": [(start s, end s, status)]}`` in tree order;
+    ``preemptions``: ``{"t", "row"}`` (row index, or None: marked across the chart);
+    ``operator``: ``{"t", "command"}`` drawn as dashed vertical lines.
+    """
+    height = 0.9 + 0.21 * max(len(rows), 1)
+    fig = _figure(9.5, height)
+    ax = fig.add_subplot()
+    indent = 9.0  # pt per tree level
+    column = 6.0 + max((4.7 * len(str(n["name"])) + indent * int(n["depth"]) for n in rows), default=0.0)  # pt
+    for row, node in enumerate(rows):
+        for status, colour in STATUS_COLOURS.items():
+            bars = [(a, max(b - a, end * 1e-3)) for a, b, s in node["intervals"] if s == status]
+            if bars:
+                ax.broken_barh(bars, (row - 0.38, 0.76), facecolors=colour)
+        ax.annotate(str(node["name"]), xy=(0, row), xycoords=("axes fraction", "data"), ha="left", va="center",
+                    xytext=(-column + indent * int(node["depth"]), 0), textcoords="offset points", fontsize=8,
+                    annotation_clip=False, parse_math=False)
+    for mark in preemptions:
+        if mark.get("row") is not None:
+            ax.plot(mark["t"], mark["row"], marker="v", color="black", ms=7, zorder=5)
+        else:
+            ax.axvline(mark["t"], color="black", lw=0.8, ls=":")
+    for command in operator:
+        ax.axvline(command["t"], color="#555", lw=0.8, ls="--")
+        ax.text(command["t"], -0.9, str(command["command"]), fontsize=7, rotation=90, va="bottom", ha="right",
+                parse_math=False, color="#333")
+    ax.set_xlim(0, max(end, 1e-3))
+    ax.set_ylim(len(rows) - 0.5, -1.0 if operator else -0.5)
+    ax.set_yticks([])
+    ax.set_xlabel("simulated time (s)")
+    ax.grid(True, axis="x", lw=0.3, alpha=0.6)
+    handles = [Patch(color=c, label=s) for s, c in STATUS_COLOURS.items()]
+    handles.append(Line2D([], [], marker="v", color="black", ls="", label="preempted"))
+    if operator:
+        handles.append(Line2D([], [], color="#555", ls="--", label="operator command"))
+    ax.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=len(handles), fontsize=8,
+              frameon=False)
+    return _svg(fig, "behaviour-tree timeline: one row per node, coloured by status over simulated time")
+
+
+@_styled
+def phases_svg(rows: Sequence[Mapping[str, Any]], end: float) -> str:
+    """The phases skills went through (docking phases, landing states): ``{"name", "intervals": [(a, b, phase)]}``.
+
+    One row per node; each phase a bar (colours cycling along the row) labelled with its name where
+    the label fits (the events table lists every phase).
+    """
+    fig = _figure(9.5, 0.8 + 0.32 * len(rows))
+    ax = fig.add_subplot()
+    points_per_s = 560.0 / max(end, 1e-3)  # about the axes' width in pt over the run
+    for row, node in enumerate(rows):
+        for index, (a, b, phase) in enumerate(node["intervals"]):
+            ax.broken_barh([(a, max(b - a, end * 4e-3))], (row - 0.4, 0.8), facecolors=robot_colour(index),
+                           alpha=0.75, edgecolor="white")
+            if (b - a) * points_per_s > 4.3 * len(phase) + 6:
+                ax.text(a + (b - a) / 2, row, phase, ha="center", va="center", fontsize=7, color="white",
+                        clip_on=True, parse_math=False)
+    ax.set_yticks(range(len(rows)), [str(node["name"]) for node in rows])
+    for label in ax.get_yticklabels():
+        label.set_parse_math(False)
+    ax.set_xlim(0, max(end, 1e-3))
+    ax.set_ylim(len(rows) - 0.5, -0.5)
+    ax.set_xlabel("simulated time (s)")
+    ax.grid(True, axis="x", lw=0.3, alpha=0.6)
+    return _svg(fig, "phases reported by the skills over simulated time")
+
+
+# ------------------------------------------------------------------ metrics
+@_styled
+def metric_svgs(series: Mapping[str, Mapping[str, tuple[np.ndarray, np.ndarray]]]) -> list[tuple[str, str]]:
+    """One small plot per metric: ``{name: {labels text: (t s, values)}}`` -> ``[(name, svg)]``."""
+    out = []
+    for name, lines in series.items():
+        fig = _figure(4.6, 2.6)
+        ax = fig.add_subplot()
+        for index, (labels, (t, values)) in enumerate(lines.items()):
+            line, = ax.plot(t, values, lw=1.2, color=robot_colour(index), label=labels or name)
+            line.set_label(labels or name)
+        ax.set_title(name, parse_math=False)
+        ax.set_xlabel("simulated time (s)")
+        ax.grid(True, lw=0.3, alpha=0.5)
+        if len(lines) > 1 or next(iter(lines), ""):
+            legend = ax.legend(fontsize=7, framealpha=0.8)
+            for text in legend.get_texts():
+                text.set_parse_math(False)
+        out.append((name, _svg(fig, f"metric {name} over simulated time")))
+    return out
+
+
+# ------------------------------------------------------------------ campaigns
+@_styled
+def outcome_svg(outcomes: Mapping[str, int]) -> str:
+    """Bar chart of trial outcomes (counts)."""
+    fig = _figure(5.0, 2.6)
+    ax = fig.add_subplot()
+    names = list(outcomes)
+    colours = [STATUS_COLOURS["SUCCESS"] if n == "success" else STATUS_COLOURS["FAILURE"] for n in names]
+    ax.bar(range(len(names)), [outcomes[n] for n in names], color=colours)
+    ax.set_xticks(range(len(names)), names)
+    for label in ax.get_xticklabels():
+        label.set_parse_math(False)
+    ax.set_ylabel("trials")
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.set_title("outcomes")
+    return _svg(fig, "bar chart of trial outcomes")
+
+
+@_styled
+def histograms(values: Mapping[str, Sequence[float]]) -> list[tuple[str, str]]:
+    """One histogram per quantity (``{name: values}``, non-finite values left out) -> ``[(name, svg)]``."""
+    out = []
+    for name, data in values.items():
+        finite = [float(v) for v in data if v is not None and math.isfinite(float(v))]
+        if not finite:
+            continue
+        fig = _figure(4.6, 2.6)
+        ax = fig.add_subplot()
+        ax.hist(finite, bins=min(20, max(5, len(finite) // 2)), color="#4a7ab5", edgecolor="white")
+        ax.set_title(f"{name} (n={len(finite)})", parse_math=False)
+        ax.set_ylabel("trials")
+        ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+        out.append((name, _svg(fig, f"histogram of {name} over the trials")))
+    return out
