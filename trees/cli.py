@@ -27,8 +27,7 @@ import marsupial
 from .errors import MissionError
 
 #: mission run by ``marsupial run`` without a MISSION argument
-#: landing_circular until usar_docking completes again on onboard sensing (its first docking fails in rendezvous)
-DEFAULT_MISSION = "landing_circular"
+DEFAULT_MISSION = "usar_docking"
 
 _err = Console(stderr=True)
 
@@ -108,7 +107,7 @@ def cli() -> None:
 @click.option("--quiet", "-q", is_flag=True, help="No progress line and no summary table.")
 def run(mission: str, seed: int | None, log_path: str | None, until: float | None, gui: bool,
         sets: tuple[str, ...], operator: bool, record_images: bool, quiet: bool) -> None:
-    """Run MISSION (a name or a .yaml path; default: landing_circular, a landing on a moving UGV)."""
+    """Run MISSION (a name or a .yaml path; default: usar_docking, the USAR docking mission)."""
     from .runner import run_mission
 
     try:
