@@ -52,62 +52,24 @@ radians, seconds (simulated).
 from __future__ import annotations
 
 import math
-from collections import deque
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from marsupial.geometry import rot_z, rotation_matrix, transform
-from marsupial.world.onboard import StateEstimate, VisionFix, vision_fix_topic
+from marsupial.sensing import EstimateHistory
+from marsupial.world.onboard import VisionFix, vision_fix_topic
 
 from .selection import yaw_of_rotation
 
 ESTIMATE_WINDOW = 1.0  # s of estimates kept to propagate to a late frame's stamp
-
-
-def pose_at(estimate: StateEstimate, t: float) -> np.ndarray:
-    """The estimated base pose (4×4, navigation frame) at ``t``, extrapolated from ``estimate`` with its velocity and yaw rate."""
-    dt = t - estimate.stamp
-    R = rotation_matrix(estimate.orientation)
-    if dt != 0.0:
-        yaw_rate = float((R @ np.asarray(estimate.angular_velocity))[2])  # body rates → about the frame's z
-        R = rot_z(yaw_rate * dt) @ R
-    return transform(np.asarray(estimate.position) + np.asarray(estimate.velocity) * dt, R)
-
-
 MAX_FRAME_AGE_S = 0.5  # s: older frames are not fused (the estimates would be extrapolated to their stamp)
 
 
-class EstimateHistory:
-    """A robot's onboard estimates of the last ``window`` s; its pose at a time in (or just past) that window."""
-
-    def __init__(self, window: float = ESTIMATE_WINDOW):
-        self.window = window
-        self.samples: deque[StateEstimate] = deque()
-
-    def add(self, estimate: StateEstimate | None) -> None:
-        """Keep ``estimate`` if it is newer than the last one kept."""
-        if estimate is None or (self.samples and estimate.stamp <= self.samples[-1].stamp):
-            return
-        self.samples.append(estimate)
-        while len(self.samples) > 2 and self.samples[1].stamp < estimate.stamp - self.window:
-            self.samples.popleft()
-
-    @property
-    def latest(self) -> StateEstimate | None:
-        """The newest estimate kept (``None``: none yet)."""
-        return self.samples[-1] if self.samples else None
-
-    def at(self, t: float) -> np.ndarray | None:
-        """The pose (4×4) at ``t``, propagated from the newest estimate not later than ``t`` (or the oldest one)."""
-        if not self.samples:
-            return None
-        chosen = self.samples[0]
-        for estimate in reversed(self.samples):
-            if estimate.stamp <= t:
-                chosen = estimate
-                break
-        return pose_at(chosen, t)
+def pose_at(history: EstimateHistory, t: float) -> np.ndarray | None:
+    """The estimated base pose (4×4, navigation frame) at ``t`` from ``history``; ``None`` before any estimate."""
+    pose = history.at(t)
+    return None if pose is None else transform(*pose)
 
 
 class RelativePoseFilter:
@@ -256,16 +218,16 @@ class RelativePose:
         self.vision_fixes = vision_fixes
         self.T_base_M = transform(*carrier.arm_mount())  # M in the footprint frame the carrier's estimate is of
         self.filter = RelativePoseFilter(gain, gate)
-        self.carrier_history = EstimateHistory()  # the carrier's estimate (map or odom): before the first frame
-        self.odometry_history = EstimateHistory()  # its wheel odometry: N from the first frame on
-        self.uav_history = EstimateHistory()
+        self.carrier_history = EstimateHistory(ESTIMATE_WINDOW)  # the carrier's estimate: until the first frame
+        self.odometry_history = EstimateHistory(ESTIMATE_WINDOW)  # its wheel odometry: N from the first frame on
+        self.uav_history = EstimateHistory(ESTIMATE_WINDOW)
         self.fused_stamp = -math.inf
         self.seen_at = -math.inf
         self.since = since
 
     def T_N_M(self, t: float, odometry: bool) -> np.ndarray | None:
         """Frame M in the carrier's frame at ``t``: of its wheel odometry (``odometry``) or of its estimate."""
-        T_N_base = (self.odometry_history if odometry else self.carrier_history).at(t)
+        T_N_base = pose_at(self.odometry_history if odometry else self.carrier_history, t)
         return None if T_N_base is None else T_N_base @ self.T_base_M
 
     def send_fix(self, T_N_Q: np.ndarray, stamp: float) -> None:
@@ -284,7 +246,7 @@ class RelativePose:
         fresh = observation is not None and observation.stamp >= now - MAX_FRAME_AGE_S  # not a frame from before this skill
         if fresh and observation.seen and observation.stamp > self.fused_stamp:
             self.fused_stamp = observation.stamp
-            T_N_M, T_O_Q = self.T_N_M(observation.stamp, odometry=True), self.uav_history.at(observation.stamp)
+            T_N_M, T_O_Q = self.T_N_M(observation.stamp, odometry=True), pose_at(self.uav_history, observation.stamp)
             if T_N_M is not None and T_O_Q is not None and self.filter.measure(
                 observation.pose.T_M_Q, T_N_M, T_O_Q, observation.stamp
             ):
@@ -292,7 +254,7 @@ class RelativePose:
                 T_map_M = self.T_N_M(observation.stamp, odometry=False)  # the fix is in the frame the UAV's shares
                 if self.vision_fixes and T_map_M is not None:
                     self.send_fix(T_map_M @ observation.pose.T_M_Q, observation.stamp)
-        T_N_M, T_O_Q = self.T_N_M(now, odometry=self.filter.measured), self.uav_history.at(now)
+        T_N_M, T_O_Q = self.T_N_M(now, odometry=self.filter.measured), pose_at(self.uav_history, now)
         if T_N_M is None or T_O_Q is None:
             return RelativeState(now, seen_at=self.seen_at)
         T_M_Q = self.filter.predict(T_N_M, T_O_Q, now)
