@@ -64,25 +64,33 @@ class EstimateHistory:
     """A robot's own recent estimates (the last ``window`` s), to place a late sample with the estimate of its stamp.
 
     Sensors deliver samples late (a camera's video latency; a sample taken
-    at an earlier read): :meth:`at` gives the body pose at such a stamp,
-    propagated (:func:`body_pose`) from the newest kept estimate not later
-    than it (the oldest one for a stamp before the window).
+    at an earlier read; a team member's telemetry over the link): :meth:`at`
+    gives the body pose at such a stamp, propagated (:func:`body_pose`) from
+    the newest kept estimate not later than it (the oldest one for a stamp
+    before the window).
     """
 
     def __init__(self, window: float = 2.0):
         self.window = window
         self.samples: deque[Any] = deque()
 
-    def add(self, estimate: Any) -> None:
-        """Keep ``estimate`` (ignored unless newer than the last one kept); forget those older than the window."""
-        if self.samples and estimate.stamp <= self.samples[-1].stamp:
+    def add(self, estimate: Any | None) -> None:
+        """Keep ``estimate`` (ignored if ``None`` or not newer than the last one); forget those older than the window."""
+        if estimate is None or (self.samples and estimate.stamp <= self.samples[-1].stamp):
             return
         self.samples.append(estimate)
         while len(self.samples) > 1 and self.samples[1].stamp <= estimate.stamp - self.window:
             self.samples.popleft()
 
-    def at(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """The estimated body position (m) and ``R_nav_body`` at ``t`` (s); needs one estimate kept."""
+    @property
+    def latest(self) -> Any | None:
+        """The newest estimate kept (``None``: none yet)."""
+        return self.samples[-1] if self.samples else None
+
+    def at(self, t: float) -> tuple[np.ndarray, np.ndarray] | None:
+        """The estimated body position (m) and ``R_nav_body`` at ``t`` (s); ``None`` before any estimate."""
+        if not self.samples:
+            return None
         chosen = self.samples[0]
         for estimate in reversed(self.samples):
             if estimate.stamp <= t:

@@ -6,15 +6,21 @@ Skill-level runs in a small harness against the real world; the deploy run is
 logged to MCAP and its outcome read back from the log.
 """
 
+import math
+
 import numpy as np
+import py_trees
+import pybullet
 import pytest
 from py_trees.common import Status
 from skill_harness import Harness
 
+from marsupial.geometry import yaw_of
 from marsupial.skills.uav_docking.storage import Deploy, Store
 from marsupial.trees.replay import read_log
 from marsupial.world import World
 from marsupial.world.contacts import ContactMonitor
+from marsupial.world.robots.attachment import place_link_at
 from marsupial.world.world import GRAVITY
 
 CHARGE_CURRENT = 3.5  # A, the 12.6 V / 3.5 A charger of §V-A
@@ -121,3 +127,24 @@ def test_deploy_climbs_clear_of_the_arm_without_touching_the_carrier(deployment)
     assert lateral[axial < 0.1].max() < 0.05
     assert lateral.max() < 0.15  # and kept over it while climbing (the UAV accelerates to the carrier's speed)
     assert np.allclose(final["arm"], final["stowed"])  # the arm folds back for driving
+
+
+def test_deploy_hands_over_the_heading_the_uav_was_locked_with():
+    """A UAV the tracking docked facing the carrier's rear (Part B half a turn on Part A, ``part_b_yaw`` = π, written
+    by ``contact`` at the lock) starts its flight with its true heading: its optical flow is rotated the right way."""
+    with World(seed=6) as world:
+        carrier = world.add_robot("mobile_manipulator", "carrier")
+        uav = world.add_robot("bebop2", "uav", pose=[3.0, 0.0, 0.0])
+        carrier.reset_arm("storage")
+        p_A, q_A = carrier.link_pose("part_a")
+        _, turned = pybullet.multiplyTransforms([0, 0, 0], list(q_A), [0, 0, 0], [0, 0, 1, 0])  # π about Part A's z
+        place_link_at(uav, "part_b", p_A, turned)
+        carrier.docking._attach(uav)  # locked as a contact phase leaves it
+        harness = Harness(world)
+        py_trees.blackboard.Blackboard.set("/carrier/part_b_yaw", math.pi)
+        deploy = harness.node(Deploy, "uav")
+        while getattr(deploy, "phase", None) != "climb" and world.now < 10.0:  # up to the release
+            assert harness.run(deploy, 0.1) == Status.RUNNING
+        assert harness.blackboard("carrier/part_b_yaw") is None  # released: no UAV on Part A any more
+        error = math.remainder(uav.estimator.estimate().yaw - yaw_of(uav.pose()[1]), math.tau)
+        assert abs(error) < 0.05

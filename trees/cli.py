@@ -28,8 +28,7 @@ import marsupial
 from .errors import MissionError
 
 #: mission run by ``marsupial run`` without a MISSION argument
-#: landing_circular until usar_docking completes again on onboard sensing (its first docking fails in rendezvous)
-DEFAULT_MISSION = "landing_circular"
+DEFAULT_MISSION = "usar_docking"
 
 _err = Console(stderr=True)
 
@@ -125,7 +124,7 @@ def cli() -> None:
 def run(mission: str, seed: int | None, log_path: str | None, no_log: bool, until: float | None, gui: bool,
         sets: tuple[str, ...], operator: bool, record_images: bool, quiet: bool, live: bool, host: str | None,
         port: int | None, speed: float | None) -> None:
-    """Run MISSION (a name or a .yaml path; default: landing_circular, a landing on a moving UGV).
+    """Run MISSION (a name or a .yaml path; default: usar_docking, the USAR docking mission).
 
     The run is logged to runs/<mission>-<UTC time>.mcap unless --log FILE or
     --no-log; the path and the `marsupial report` command for it are printed

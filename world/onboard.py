@@ -335,6 +335,14 @@ class WheeledOnboard(Onboard):
         estimate = self.estimate()
         return estimate.position, estimate.orientation
 
+    def odometry(self) -> StateEstimate:
+        """The wheel odometry's own estimate of ``base_footprint`` (frame ``odom``): smooth, drifting with distance.
+
+        Behind a map localiser (``localization: map``) this is the dead reckoning the fixes correct, free of
+        their jumps; without one it is :meth:`estimate` itself.
+        """
+        return self._robot.odometry.estimate()  # type: ignore[attr-defined, no-any-return]
+
 
 class PlatformOnboard(WheeledOnboard):
     """A ground robot carrying a landing platform (``summit_xl``): its size and mount from the model."""

@@ -38,19 +38,27 @@ Phases (``state_change`` events with ``phase``):
   B's ring (Fig. 12c); once the lever end switch reports the lock and the
   docking device stops the UAV's motors, the skill succeeds (``locked``,
   with the metrics ``contact_time`` and ``docking_time``: from the start of
-  tracking to the lock).
+  tracking to the lock; the UAV's heading on Part A, from the camera's last
+  estimate, goes to the blackboard for the deployment's hand-over). Levers
+  that close on nothing (no end switch) with the contact switch still
+  closed close again (``lock_failed``); with it open, Part B was knocked off
+  the face before they held it and the contact is cancelled (below): the end
+  effector drops back to regain sight rather than keep rising, blind, at a
+  UAV knocked aside.
 
 The eq. (15) samples are logged as the metrics ``contact_t`` (t_c) and
 ``contact_z_C`` (z_C of Part A in M).
 
-Losing the marker for ``lost_timeout`` while Part B is farther than
-``blind_range``, or for ``blind_timeout`` closer than that (the camera is
-too near the bundle to see all of it; the pose estimate carries on with the
-two robots' estimates, whose drift grows with the time), or an approach
-longer than ``timeout``, cancels the contact (``contact_cancelled``): the
-magnet goes off, the target is withdrawn so that the end effector drops back
-to the tracking standoff to regain sight, and authorization is requested
-again ("for safety, the contact authorization is requested after any
+A capture lost that way, losing the marker for ``lost_timeout`` while Part
+B is farther than ``blind_range``, or for ``blind_timeout`` closer than that
+(the camera is too near the bundle to see all of it; the pose estimate
+carries on with the two robots' estimates, whose drift grows with the
+time), or an approach longer than ``timeout``, cancels the contact
+(``contact_cancelled``): the magnet goes off, the target is withdrawn so
+that the end effector drops back to the tracking standoff to regain sight
+(§IV-B: "the value for z_C_eff will decrease quickly to a low position to
+enhance the camera field of view"), and authorization is requested again
+("for safety, the contact authorization is requested after any
 cancellation", §IV-B). After ``max_cancellations`` the skill fails.
 
 Every decision reads the device's states (coil, contact switch, lever end
@@ -67,8 +75,10 @@ from pydantic import Field
 
 from marsupial.trees.skill import Condition, NodeParams, Skill
 
-from .relative_hold import PART_A_LINK
-from .team import DOCKING_FLAG, carrier_port, phase_event
+from .pose import invert
+from .relative_hold import PART_A_LINK, part_b_transform
+from .selection import yaw_of_rotation
+from .team import DOCKING_FLAG, PART_B_YAW, carrier_port, phase_event
 from .track import CONTACT_TARGET, TRACKING, ContactTarget, TrackingState
 
 CAPTURE_TIME = 1.0  # s the magnet may take to bring Part B into contact before the capture is retried
@@ -121,7 +131,7 @@ class Contact(Skill):
 
     robot_kinds = ("Quadrotor",)
     reads = (f"{{carrier}}/{TRACKING}",)
-    writes = (f"{{carrier}}/{CONTACT_TARGET}", f"{{carrier}}/{DOCKING_FLAG}")
+    writes = (f"{{carrier}}/{CONTACT_TARGET}", f"{{carrier}}/{DOCKING_FLAG}", f"{{carrier}}/{PART_B_YAW}")
 
     @property
     def operator_commands(self) -> tuple[str, ...]:
@@ -244,17 +254,14 @@ class Contact(Skill):
             self.phase = "approach"
             self.failed_captures += 1
             phase_event(self, "capture_failed", gap_estimate=round(gap, 4), failed=self.failed_captures)
-        elif self.phase == "locking" and not switch and not self.device.locking and gap > 2.0 * self.device.capture_distance:
-            self.device.magnet_off()  # Part B got away from the face before the levers held it
-            self.phase = "approach"
-            phase_event(self, "capture_lost", gap_estimate=round(gap, 4))
+        elif self.phase == "locking" and not self.device.locking and not self.device.locked:  # closed on nothing
+            if not switch:  # Part B got away from the face before the levers held it: an external force (§IV-B)
+                return self.cancel(f"capture lost: the levers closed on nothing (estimated gap {gap:.3f} m)")
+            self.phase = "capture"  # still seated: close the levers again
+            phase_event(self, "lock_failed", gap_estimate=round(gap, 4))
         if self.phase == "capture" and switch and self.device.lock():
             self.phase = "locking"  # Fig. 12c: the contact switch is closed, the levers close on Part B's ring
             phase_event(self, "locking", t_c=round(self.t_c, 3))
-        elif self.phase == "locking" and not self.device.locking and not self.device.locked:  # closed on nothing
-            self.phase = "capture"
-            self.captured_at = now
-            phase_event(self, "lock_failed", gap_estimate=round(gap, 4))
         self.write(self.key, ContactTarget(standoff, self.cone))
         self.context.metric("contact_t", self.t_c, robot=self.robot_name)
         self.context.metric("contact_z_C", contact_height(self.z0, self.t_c, p.k_c), robot=self.robot_name)
@@ -270,6 +277,11 @@ class Contact(Skill):
         if state is not None:
             fields["docking_time"] = round(now - state.started, 3)
             self.context.metric("docking_time", now - state.started, robot=self.robot_name)
+        if state is not None and state.T_M_Q is not None:  # the levers hold Part B at the heading it was caught with
+            T_M_A = self.carrier.arm_kinematics.transform(self.carrier.joint_positions(), PART_A_LINK)
+            yaw = yaw_of_rotation((invert(T_M_A) @ state.T_M_Q @ part_b_transform(self.robot))[:3, :3])
+            self.write(f"{self.params.carrier}/{PART_B_YAW}", yaw)
+            fields["part_b_yaw"] = round(yaw, 3)
         phase_event(self, "locked", **fields)
         self.feedback_message = f"{self.robot.name} locked on Part A, motors off"
         return Status.SUCCESS

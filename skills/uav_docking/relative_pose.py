@@ -4,9 +4,18 @@ The eye-in-hand camera measures P_Q^M (eq. 1) at its frame rate, late by
 its latency, and not at all when the bundle is out of view. Between frames
 the pose is propagated with what the two robots know of their own motion:
 
-- the carrier's onboard estimate (wheel odometry or map localisation) of its
-  base in its navigation frame N, composed with M's mount in the URDF:
-  ``T_N_M(t)``;
+- the carrier's onboard estimate of its base in its navigation frame N,
+  composed with M's mount in the URDF: ``T_N_M(t)``. Until the first frame
+  anchors the pose (the initial encounter flies on the estimates alone) N is
+  the frame of the carrier's estimate (the map, localised; or ``odom``), the
+  frame the UAV's estimate shares; from the first frame on it is the frame
+  of the carrier's wheel odometry (``odom``), whose motion is smooth. A map
+  localiser's fixes jump (AMCL-like: 1.4 cm per axis and 0.3° every 0.2 s at
+  the default 5 cm / 1° / 5 s error, ``docs/world.md``), and every jump
+  between a frame's stamp and now would pass straight into P_Q^M, the arm's
+  target and the UAV's hold: 2–3 cm of lateral error at contact, against
+  under 1 cm on odometry. Both frames are the carrier's own; the camera
+  frames measure the rest;
 - the UAV's onboard estimate (IMU, optical flow, sonar, barometer) of its
   base in its odometry frame O, as the carrier receives it over the team
   link (20 Hz telemetry, late and sometimes lost): ``T_O_Q(t)``, extrapolated
@@ -24,16 +33,17 @@ External vision fix (opt-in, ``vision_fixes=True``; off by default because
 it measured worse: 24/25 encounters locked with 26 unintended contacts
 against 10/10 with none without it, see the issue notes): each frame
 accepted by the filter is also sent to the UAV over the team link (:class:`~marsupial.world.onboard.VisionFix` on
-``<uav>/vision_fix``): the UAV base's pose in N, ``T_N_M(t_k) · P_Q^M(t_k)``,
-the camera's measurement composed with the carrier's own estimate at the
-frame's stamp ``t_k`` (not the fused pose: the UAV's own estimate is no part
-of it). The UAV's flight estimator fuses it as a delayed measurement
-(:mod:`marsupial.world.estimation.external`), which pulls O onto N: ``C``
-then tends to the identity and the UAV's velocity estimate, the one its
-autopilot flies on, is the velocity in N, the frame of the carrier's
-velocity that the relative hold feeds forward. Frames: N is the carrier's
-navigation frame; O the UAV's, equal to N at the start of a run and after
-a deploy hand-over (``reset_estimate``), anchored to N while fixes arrive.
+``<uav>/vision_fix``): the UAV base's pose in the frame of the carrier's
+estimate, ``T_map_M(t_k) · P_Q^M(t_k)``, the camera's measurement composed
+with the carrier's own estimate at the frame's stamp ``t_k`` (not the fused
+pose: the UAV's own estimate is no part of it). The UAV's flight estimator
+fuses it as a delayed measurement (:mod:`marsupial.world.estimation.external`),
+which pulls O onto that frame, so that the UAV's velocity estimate, the one
+its autopilot flies on, is the velocity in the frame of the carrier's
+velocity that the relative hold feeds forward. Frames: O is the UAV's
+odometry frame, equal to the carrier's estimate frame at the start of a run
+and after a deploy hand-over (``reset_estimate``), anchored to it while
+fixes arrive.
 
 Frames and units: 4×4 homogeneous transforms ``T_A_B`` (B in A), metres,
 radians, seconds (simulated).
@@ -42,62 +52,24 @@ radians, seconds (simulated).
 from __future__ import annotations
 
 import math
-from collections import deque
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from marsupial.geometry import rot_z, rotation_matrix, transform
-from marsupial.world.onboard import StateEstimate, VisionFix, vision_fix_topic
+from marsupial.sensing import EstimateHistory
+from marsupial.world.onboard import VisionFix, vision_fix_topic
 
 from .selection import yaw_of_rotation
 
 ESTIMATE_WINDOW = 1.0  # s of estimates kept to propagate to a late frame's stamp
-
-
-def pose_at(estimate: StateEstimate, t: float) -> np.ndarray:
-    """The estimated base pose (4×4, navigation frame) at ``t``, extrapolated from ``estimate`` with its velocity and yaw rate."""
-    dt = t - estimate.stamp
-    R = rotation_matrix(estimate.orientation)
-    if dt != 0.0:
-        yaw_rate = float((R @ np.asarray(estimate.angular_velocity))[2])  # body rates → about the frame's z
-        R = rot_z(yaw_rate * dt) @ R
-    return transform(np.asarray(estimate.position) + np.asarray(estimate.velocity) * dt, R)
-
-
 MAX_FRAME_AGE_S = 0.5  # s: older frames are not fused (the estimates would be extrapolated to their stamp)
 
 
-class EstimateHistory:
-    """A robot's onboard estimates of the last ``window`` s; its pose at a time in (or just past) that window."""
-
-    def __init__(self, window: float = ESTIMATE_WINDOW):
-        self.window = window
-        self.samples: deque[StateEstimate] = deque()
-
-    def add(self, estimate: StateEstimate | None) -> None:
-        """Keep ``estimate`` if it is newer than the last one kept."""
-        if estimate is None or (self.samples and estimate.stamp <= self.samples[-1].stamp):
-            return
-        self.samples.append(estimate)
-        while len(self.samples) > 2 and self.samples[1].stamp < estimate.stamp - self.window:
-            self.samples.popleft()
-
-    @property
-    def latest(self) -> StateEstimate | None:
-        """The newest estimate kept (``None``: none yet)."""
-        return self.samples[-1] if self.samples else None
-
-    def at(self, t: float) -> np.ndarray | None:
-        """The pose (4×4) at ``t``, propagated from the newest estimate not later than ``t`` (or the oldest one)."""
-        if not self.samples:
-            return None
-        chosen = self.samples[0]
-        for estimate in reversed(self.samples):
-            if estimate.stamp <= t:
-                chosen = estimate
-                break
-        return pose_at(chosen, t)
+def pose_at(history: EstimateHistory, t: float) -> np.ndarray | None:
+    """The estimated base pose (4×4, navigation frame) at ``t`` from ``history``; ``None`` before any estimate."""
+    pose = history.at(t)
+    return None if pose is None else transform(*pose)
 
 
 class RelativePoseFilter:
@@ -246,15 +218,16 @@ class RelativePose:
         self.vision_fixes = vision_fixes
         self.T_base_M = transform(*carrier.arm_mount())  # M in the footprint frame the carrier's estimate is of
         self.filter = RelativePoseFilter(gain, gate)
-        self.carrier_history = EstimateHistory()
-        self.uav_history = EstimateHistory()
+        self.carrier_history = EstimateHistory(ESTIMATE_WINDOW)  # the carrier's estimate: until the first frame
+        self.odometry_history = EstimateHistory(ESTIMATE_WINDOW)  # its wheel odometry: N from the first frame on
+        self.uav_history = EstimateHistory(ESTIMATE_WINDOW)
         self.fused_stamp = -math.inf
         self.seen_at = -math.inf
         self.since = since
 
-    def T_N_M(self, t: float) -> np.ndarray | None:
-        """Frame M in the carrier's navigation frame at ``t``, from its estimate."""
-        T_N_base = self.carrier_history.at(t)
+    def T_N_M(self, t: float, odometry: bool) -> np.ndarray | None:
+        """Frame M in the carrier's frame at ``t``: of its wheel odometry (``odometry``) or of its estimate."""
+        T_N_base = pose_at(self.odometry_history if odometry else self.carrier_history, t)
         return None if T_N_base is None else T_N_base @ self.T_base_M
 
     def send_fix(self, T_N_Q: np.ndarray, stamp: float) -> None:
@@ -265,6 +238,7 @@ class RelativePose:
     def update(self, now: float) -> RelativeState:
         """Read the estimates, fuse a new frame in which the bundle was measured, and propagate to ``now``."""
         self.carrier_history.add(self.carrier.estimate())
+        self.odometry_history.add(self.carrier.odometry())
         message = self.link.latest(self.uav)
         if message is not None and message.payload.stamp >= self.since:
             self.uav_history.add(message.payload)
@@ -272,18 +246,20 @@ class RelativePose:
         fresh = observation is not None and observation.stamp >= now - MAX_FRAME_AGE_S  # not a frame from before this skill
         if fresh and observation.seen and observation.stamp > self.fused_stamp:
             self.fused_stamp = observation.stamp
-            T_N_M, T_O_Q = self.T_N_M(observation.stamp), self.uav_history.at(observation.stamp)
+            T_N_M, T_O_Q = self.T_N_M(observation.stamp, odometry=True), pose_at(self.uav_history, observation.stamp)
             if T_N_M is not None and T_O_Q is not None and self.filter.measure(
                 observation.pose.T_M_Q, T_N_M, T_O_Q, observation.stamp
             ):
                 self.seen_at = observation.stamp
-                if self.vision_fixes:
-                    self.send_fix(T_N_M @ observation.pose.T_M_Q, observation.stamp)
-        T_N_M, T_O_Q = self.T_N_M(now), self.uav_history.at(now)
+                T_map_M = self.T_N_M(observation.stamp, odometry=False)  # the fix is in the frame the UAV's shares
+                if self.vision_fixes and T_map_M is not None:
+                    self.send_fix(T_map_M @ observation.pose.T_M_Q, observation.stamp)
+        T_N_M, T_O_Q = self.T_N_M(now, odometry=self.filter.measured), pose_at(self.uav_history, now)
         if T_N_M is None or T_O_Q is None:
             return RelativeState(now, seen_at=self.seen_at)
         T_M_Q = self.filter.predict(T_N_M, T_O_Q, now)
-        uav, carrier = self.uav_history.latest, self.carrier_history.latest
+        uav = self.uav_history.latest
+        carrier = (self.odometry_history if self.filter.measured else self.carrier_history).latest
         drift_N = self.filter.rate_at(now)
         v_uav_N = self.filter.C[:3, :3] @ np.asarray(uav.velocity) + drift_N
         R_N_base = rotation_matrix(carrier.orientation)

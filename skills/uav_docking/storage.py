@@ -35,8 +35,8 @@ from marsupial.trees.skill import NodeParams, Skill
 from .pose import invert
 from .relative_hold import PART_A_LINK, CarrierFrame, HoldGains, command_hold, part_b_transform, relative_pose_of
 from .relative_pose import RelativeState
-from .selection import yaw_of_rotation
-from .team import DOCKING_FLAG, UAV_STORED, carrier_port, phase_event
+from .selection import rot_z, yaw_of_rotation
+from .team import DOCKING_FLAG, PART_B_YAW, UAV_STORED, carrier_port, phase_event
 
 ARM_TOLERANCE = 0.02  # rad: every joint this close to its target counts as arrived
 GRAVITY = 9.81  # m/s², standard gravity (the weight the rotor thrust must hold before the release)
@@ -100,7 +100,8 @@ class Deploy(Skill):
         """Largest joint error (rad) at which the arm has arrived."""
 
     robot_kinds = ("Quadrotor",)
-    writes = (f"{{carrier}}/{DOCKING_FLAG}", f"{{carrier}}/{UAV_STORED}")
+    reads = (f"{{carrier}}/{PART_B_YAW}",)
+    writes = (f"{{carrier}}/{DOCKING_FLAG}", f"{{carrier}}/{UAV_STORED}", f"{{carrier}}/{PART_B_YAW}")
 
     def start(self) -> None:
         self.carrier = carrier_port(self, self.params.carrier)
@@ -110,7 +111,7 @@ class Deploy(Skill):
         self.p_clear_M = np.zeros(3)
         self.yaw_clear_M = 0.0
         self.gains = HoldGains(max_speed=self.params.climb_speed)
-        self.T_A_Q = invert(part_b_transform(self.robot))  # the UAV on Part A: Part B's face on Part A's (§IV-C)
+        self.T_Q_B = part_b_transform(self.robot)
         self.relative = None
         self.write(f"{self.params.carrier}/{DOCKING_FLAG}", True)
         phase_event(self, "raise")
@@ -140,6 +141,7 @@ class Deploy(Skill):
                 self.relative = relative_pose_of(self, self.carrier, since=self.now)  # the estimates after the hand-over
                 self.carrier.docking.release()
                 self.write(f"{self.params.carrier}/{UAV_STORED}", False)
+                self.write(f"{self.params.carrier}/{PART_B_YAW}", None)  # released: no UAV on Part A
                 self.phase = "climb"
                 phase_event(self, "released", thrust=uav.thrust, weight=weight)
                 return self.climb()
@@ -152,10 +154,15 @@ class Deploy(Skill):
     def hand_over(self) -> np.ndarray:
         """Reset the UAV's estimator to its pose at release, as the carrier knows it; returns that pose in M (4×4).
 
-        P_Q^M = F(q) of Part A (encoders) ∘ the UAV on Part A; in the
-        carrier's navigation frame through the carrier's own estimate.
+        P_Q^M = F(q) of Part A (encoders) ∘ the UAV on Part A: Part B's face
+        centred on Part A's (§IV-C) at the heading the contact phase caught it
+        with (``<carrier>/part_b_yaw``); in the carrier's navigation frame
+        through the carrier's own estimate.
         """
-        T_M_Q = self.carrier.arm_kinematics.transform(self.carrier.joint_positions(), PART_A_LINK) @ self.T_A_Q
+        T_A_B = np.eye(4)
+        T_A_B[:3, :3] = rot_z(float(self.read(f"{self.params.carrier}/{PART_B_YAW}") or 0.0))
+        T_M_A = self.carrier.arm_kinematics.transform(self.carrier.joint_positions(), PART_A_LINK)
+        T_M_Q = T_M_A @ T_A_B @ invert(self.T_Q_B)
         frame = CarrierFrame.of(self.carrier)
         p_N = frame.to_world(T_M_Q[:3, 3])
         yaw_N = frame.yaw + yaw_of_rotation(T_M_Q[:3, :3])

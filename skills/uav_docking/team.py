@@ -17,7 +17,11 @@ Blackboard keys written by the family, under the carrier's name
 - :data:`UAV_POSE` ``uav_pose_M`` — the last eye-in-hand measurement of the
   UAV (an :class:`~.observer.UavObservation`);
 - :data:`UAV_STORED` ``uav_stored`` — True while a UAV is stored on the
-  carrier (written by ``store`` and ``deploy``).
+  carrier (written by ``store`` and ``deploy``);
+- :data:`PART_B_YAW` ``part_b_yaw`` — the heading (rad) of the locked UAV's
+  Part B about Part A's axis, from the camera's estimate at the lock
+  (written by ``contact``; read by ``deploy`` for the hand-over and cleared
+  at the release; unset: 0, a UAV the mission stores on Part A's frame).
 """
 
 from __future__ import annotations
@@ -34,6 +38,7 @@ if TYPE_CHECKING:
 DOCKING_FLAG = "docking"
 UAV_POSE = "uav_pose_M"
 UAV_STORED = "uav_stored"
+PART_B_YAW = "part_b_yaw"
 
 
 def carrier_port(skill: Skill, name: str) -> CommandPort:
