@@ -106,9 +106,14 @@ def stop_text(skill: Skill) -> str | None:
 
 
 class SimTimeout(py_trees.decorators.Decorator):
-    """Fail (stopping the child) when the child runs longer than ``seconds`` of simulated time."""
+    """Fail (stopping the child) when the child runs longer than ``seconds`` of simulated time.
 
-    btcpp_tag = "Timeout"  # BehaviorTree.CPP export (trees/btxml.py)
+    A subclass sets ``expired`` (the status when the time is up) and ``expired_text`` (its feedback).
+    """
+
+    btcpp_tag: str | None = "Timeout"  # BehaviorTree.CPP export (trees/btxml.py)
+    expired = Status.FAILURE
+    expired_text = "timed out after {seconds:g} s"
 
     def __init__(self, name: str, child: Behaviour, seconds: float, clock: Callable[[], float]):
         super().__init__(name=name, child=child)
@@ -129,7 +134,7 @@ class SimTimeout(py_trees.decorators.Decorator):
             return self.decorated.status
         left = self._deadline - self._clock()
         if left <= 1e-9:
-            self.feedback_message = f"timed out after {self.seconds:g} s"
-            return Status.FAILURE
+            self.feedback_message = self.expired_text.format(seconds=self.seconds)
+            return self.expired
         self.feedback_message = f"{left:.1f} s left"
         return Status.RUNNING
