@@ -131,8 +131,10 @@ def test_waiting_nodes_in_the_models_schema_and_export():
     ("{run_for: {idle: true}, secnds: 2, seconds: 1}", "m.yaml:3:27: tree.secnds: unknown key 'secnds'; expected one "
      "of name, run_for, seconds; did you mean 'seconds'?"),
     ("{run_for: {idle: true}}", "m.yaml:2:1: tree.seconds: missing required key 'seconds'; expected a number"),
-    ("{run_for: {idle: true}, seconds: .inf}", "m.yaml:3:27: tree.seconds: invalid value inf; expected a finite number"),
-    ("{run_for: {idle: true}, idle: true, seconds: 1}", "a node has exactly one node type key, found 'run_for', 'idle'"),
+    ("{run_for: {idle: true}, seconds: .inf}",
+     "m.yaml:3:27: tree.seconds: invalid value inf; expected a finite number"),
+    ("{run_for: {idle: true}, idle: true, seconds: 1}",
+     "a node has exactly one node type key, found 'run_for', 'idle'"),
 ])
 def test_waiting_node_errors_are_located(tree, message):
     assert message in error_of(mission_text(tree))

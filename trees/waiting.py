@@ -72,7 +72,8 @@ class WaitUntil(py_trees.decorators.Decorator):
         if left <= 1e-9:
             self.feedback_message = f"{self.decorated.name} did not hold within {self.timeout:g} s"
             return Status.FAILURE
-        self.feedback_message = f"waiting for {self.decorated.name}" + ("" if math.isinf(left) else f", {left:.1f} s left")
+        limit = "" if math.isinf(left) else f", {left:.1f} s left"
+        self.feedback_message = f"waiting for {self.decorated.name}{limit}"
         return Status.RUNNING
 
 
