@@ -12,10 +12,11 @@ Conventions (an HTML comment on the line before the fence, invisible when render
   a Summit XL with an AR.Drone 2);
 - ``<!-- fragment: keys -->``: top-level mission keys (``world:``, ``team:`` …), loaded in a mission whose
   tree is ``{idle: true}`` and its world built (scene, robots, options, sensors, disturbances checked);
-- ```python: compiled; with ``<!-- run -->`` executed too, the page's run snippets in one namespace
-  (classes of one snippet are seen by the next). Skill and condition classes a page runs are pinned in
-  that page's missions under the entry-point names of the page's ```toml snippet;
-- ```toml: parsed.
+- ```python: compiled; with ``<!-- run -->`` executed too (and the ``test_*`` functions it defines
+  called), the page's run snippets in one namespace (classes of one snippet are seen by the next);
+- ```toml: parsed. The modules its ``marsupial.skills`` / ``marsupial.conditions`` entry points name
+  (``my_pkg.orbit``) import as the page's namespace, and the page's missions get those entry points
+  as ``plugins:`` pins, so a page's skill and condition classes are the ones its missions use.
 
 A ```yaml snippet without a mission key or a comment fails the test: say what it is.
 """
@@ -65,22 +66,32 @@ def _ids(page: Path) -> str:
 
 
 def _run_python(page: Path, module: types.ModuleType, line: int, body: str, mark: str) -> None:
+    """Compile a python snippet; a ``run`` one is executed, and the ``test_*`` functions it defines are called."""
     code = compile(body, f"{_ids(page)}:{line}", "exec")
     if mark == "run":
+        before = set(module.__dict__)
         exec(code, module.__dict__)
+        for name in sorted(set(module.__dict__) - before):
+            if name.startswith("test_") and callable(module.__dict__[name]):
+                module.__dict__[name]()
 
 
-def _pins(module: types.ModuleType, tomls: list[str]) -> dict[str, str]:
-    """Entry-point name -> ``module:Class`` for each class of ``module`` that a toml snippet registers."""
-    pins = {}
+def _entry_points(tomls: list[str]) -> dict[str, str]:
+    """Entry-point name -> ``package.module:Class`` of the marsupial groups of the page's toml snippets."""
+    found = {}
     for text in tomls:
         groups = tomllib.loads(text).get("project", {}).get("entry-points", {})
         for group in ("marsupial.skills", "marsupial.conditions"):
-            for name, target in groups.get(group, {}).items():
-                cls = module.__dict__.get(target.rpartition(":")[2])
-                if isinstance(cls, type) and issubclass(cls, MissionNode):
-                    pins[name] = f"{module.__name__}:{cls.__name__}"
-    return pins
+            found.update(groups.get(group, {}))
+    return found
+
+
+def _serve(module: types.ModuleType, targets: dict[str, str], monkeypatch: pytest.MonkeyPatch) -> None:
+    """Make the modules that the entry points name (``my_pkg.orbit``) import as the page's namespace."""
+    for target in targets.values():
+        parts = target.partition(":")[0].split(".")
+        for depth in range(1, len(parts) + 1):
+            monkeypatch.setitem(sys.modules, ".".join(parts[:depth]), module)
 
 
 def _mission(body: str, pins: dict[str, str], prefix: str = "", indent: str = "") -> str:
@@ -127,12 +138,14 @@ def test_every_snippet_compiles_or_runs(page, tmp_path, monkeypatch):
     module = types.ModuleType(f"marsupial_docs_{page.stem.lower()}")
     monkeypatch.setitem(sys.modules, module.__name__, module)
     monkeypatch.chdir(tmp_path)
+    pins = _entry_points([body for _, lang, _, body in found if lang == "toml"])
+    _serve(module, pins, monkeypatch)
     for line, lang, mark, body in found:
         if lang == "python":
             _run_python(page, module, line, body, mark)
-        elif lang == "toml":
-            tomllib.loads(body)
-    pins = _pins(module, [body for _, lang, _, body in found if lang == "toml"])
+    for name, target in pins.items():
+        cls = getattr(module, target.rpartition(":")[2], None)
+        assert isinstance(cls, type) and issubclass(cls, MissionNode), f"{_ids(page)}: no class for entry point {name}"
     for line, lang, mark, body in found:
         if lang == "yaml" and mark.startswith("file:"):
             _write_file(page, line, mark.removeprefix("file:").strip(), body, tmp_path)
