@@ -12,6 +12,7 @@ Conventions (an HTML comment on the line before the fence, invisible when render
   a Summit XL with an AR.Drone 2);
 - ``<!-- fragment: keys -->``: top-level mission keys (``world:``, ``team:`` …), loaded in a mission whose
   tree is ``{idle: true}`` and its world built (scene, robots, options, sensors, disturbances checked);
+- ``<!-- fragment: scene -->``: a scene file, built in a world;
 - ```python: compiled; with ``<!-- run -->`` executed too (and the ``test_*`` functions it defines
   called), the page's run snippets in one namespace (classes of one snippet are seen by the next);
 - ```toml: parsed. The modules its ``marsupial.skills`` / ``marsupial.conditions`` entry points name
@@ -39,6 +40,8 @@ from marsupial.trees.mission import parse_mission
 from marsupial.trees.runner import build_world
 from marsupial.trees.skill import MissionNode
 from marsupial.trees.yaml_source import load_yaml
+from marsupial.world import World
+from marsupial.world import scene as scene_module
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = sorted((ROOT / "docs").glob("*.md")) + [ROOT / "README.md"]
@@ -124,6 +127,12 @@ def _check_yaml(page: Path, line: int, body: str, mark: str, scratch: Path, pins
         prefix = f"mission: fragment\nteam: {json.dumps(FRAGMENT_TEAM)}\ntree:\n"
         text = _mission(body, pins, prefix, "  ")
         compile_mission(parse_mission(text, where, path=scratch / "missions" / "fragment.yaml"))
+    elif mark == "fragment: scene":
+        name = data["name"]
+        (scratch / f"{name}.yaml").write_text(body)
+        with pytest.MonkeyPatch.context() as patch:
+            patch.setattr(scene_module, "SCENE_DIR", scratch)
+            World(scene=name).close()
     elif mark == "fragment: keys":
         loaded = parse_mission(_mission(body, pins, "mission: fragment\ntree: {idle: true}\n"), where)
         build_world(loaded, loaded.spec.world.seed).close()
