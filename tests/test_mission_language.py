@@ -250,3 +250,16 @@ def test_set_reaches_a_key_of_a_settings_group(tmp_path):
                        "world) or a mission parameter (one of short, wait); did you mean 'short'?")
     message = error_of(GROUPED, {"short.seconds": "soon"})
     assert "invalid value 'soon'; expected a number" in message and "set by --set short.seconds=soon" in message
+
+
+def test_a_preempted_idle_node_is_named_in_the_preemption_event(tmp_path):
+    result, log = run(tmp_path, """
+        priorities:
+          - when: {timer: 1.0}
+            do: {skill: wait, name: urgent, params: {seconds: 0.5}}
+          - do: {idle: true, name: stand by}
+    """)
+    assert (result.outcome, result.sim_time) == ("success", pytest.approx(1.5))
+    [event] = log.events_of("preemption")
+    assert (event["t"], event["preempted"], event["by"], event["robot"], event["stop"]) == (
+        1.0, "stand by", "urgent", None, None)

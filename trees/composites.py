@@ -3,7 +3,7 @@
 * :class:`Priorities` — a memoryless ``Selector`` whose children are
   :class:`GuardedBranch` es (``Sequence(guard..., do)``, guards re-evaluated
   every tick). When a higher-priority branch takes over from a running
-  lower one, each skill that was running in the lower branch is recorded as
+  lower one, each skill or idle node that was running in the lower branch is recorded as
   a ``preemption`` event (``preempted``, ``by``, ``why``, ``robot``, and
   ``stop``: ``"safe_stop"`` when its safe-stop was applied, ``"kept by <node>"``
   when the preempting node already drives that robot in this tick).
@@ -51,9 +51,9 @@ class GuardedBranch(py_trees.composites.Sequence):
                     channel.handle(guard.params.command)
 
 
-def running_skills(node: Behaviour) -> list[Skill]:
-    """Skills of ``node``'s subtree that are RUNNING."""
-    return [n for n in node.iterate() if isinstance(n, Skill) and n.status == Status.RUNNING]
+def running_leaves(node: Behaviour) -> list[Behaviour]:
+    """Leaves of ``node``'s subtree that are RUNNING: skills, and nodes that only wait (``idle``)."""
+    return [n for n in node.iterate() if not n.children and n.status == Status.RUNNING]
 
 
 class Priorities(py_trees.composites.Selector):
@@ -71,13 +71,13 @@ class Priorities(py_trees.composites.Selector):
 
     def tick(self):  # noqa: ANN201 (a py_trees generator)
         before = self.current_child if self.status == Status.RUNNING else None
-        running = running_skills(before) if before is not None else []
+        running = running_leaves(before) if before is not None else []
         for node in super().tick():
             if node is self and before is not None:
                 self._record_preemption(before, running)
             yield node
 
-    def _record_preemption(self, before: Behaviour, running: list[Skill]) -> None:
+    def _record_preemption(self, before: Behaviour, running: list[Behaviour]) -> None:
         now = self.current_child
         if now is None or now is before or self.status == Status.FAILURE:
             return
@@ -87,20 +87,21 @@ class Priorities(py_trees.composites.Selector):
         why = now.describe() if isinstance(now, GuardedBranch) else "default branch"
         if not running:
             self.context.event("preemption", preempted=before.name, by=by, why=why, robot=None, stop=None)
-        for skill in running:
+        for leaf in running:
             self.context.event(
                 "preemption",
-                preempted=skill.name,
+                preempted=leaf.name,
                 by=by,
                 why=why,
-                robot=skill.robot_name,
-                stop=stop_text(skill),
+                robot=getattr(leaf, "robot_name", None),
+                stop=stop_text(leaf),
             )
 
 
-def stop_text(skill: Skill) -> str | None:
-    """How a stopped skill left its robot: ``"safe_stop"``, ``"kept by <node>"``, ``None`` (no robot)."""
-    if not skill.uses_robot or skill.robot_name is None:
+def stop_text(leaf: Behaviour) -> str | None:
+    """How a stopped leaf left its robot: ``"safe_stop"``, ``"kept by <node>"``, ``None`` (no robot, or not a skill)."""
+    skill = leaf
+    if not isinstance(skill, Skill) or not skill.uses_robot or skill.robot_name is None:
         return None
     return "safe_stop" if skill.stopped_by is None else f"kept by {skill.stopped_by.node_name}"
 
