@@ -1,4 +1,4 @@
-"""Subtrees: reusable trees with named parameters, inlined into a mission; ``${name}`` substitution.
+"""Subtrees: reusable trees with named parameters, inlined into a mission; ``${name}`` substitution, ``<<`` merges.
 
 A subtree file (``missions/subtrees/<name>.yaml``, or any file given by path)::
 
@@ -16,6 +16,12 @@ whole string is the reference, formatted into the text otherwise (``$$`` is a
 literal ``$``). Inside a subtree, names are the subtree's parameters, then the
 mission's ``params``. Include cycles are an error naming the cycle and the
 include line.
+
+Settings groups: ``<<: "${group}"`` in a mapping merges the mapping that
+parameter holds (keys written beside it win), so a group of settings is passed
+at once (``params: {<<: "${tracker}", platform: ugv}``). A subtree parameter
+whose default is a non-empty mapping is a group: an include's mapping for it
+updates the default key by key, and unknown keys are errors.
 
 Subtree files are read only from inside the mission's folder and the
 package's ``missions/`` folder, or from the folders listed in the
