@@ -3,7 +3,7 @@
 Conventions (an HTML comment on the line before the fence, invisible when rendered):
 
 - ```yaml with a top-level ``mission:`` key: a whole mission, loaded and compiled (subtrees from the
-  package, or from files given earlier on the same page);
+  package, or from files given on the same page);
 - ``<!-- file: PATH -->``: a file at ``PATH`` (``missions/…``), written to a scratch folder where the
   page's missions are compiled (a mission file is compiled there too); a file that the package ships
   must equal the shipped one;
@@ -28,7 +28,6 @@ import json
 import re
 import sys
 import textwrap
-import tomllib
 import types
 from pathlib import Path
 
@@ -42,6 +41,8 @@ from marsupial.trees.skill import MissionNode
 from marsupial.trees.yaml_source import load_yaml
 from marsupial.world import World
 from marsupial.world import scene as scene_module
+
+tomllib = pytest.importorskip("tomllib")  # Python >= 3.11
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = sorted((ROOT / "docs").glob("*.md")) + [ROOT / "README.md"]
@@ -58,10 +59,13 @@ _FENCE = re.compile(r"^(?:<!-- (?P<mark>[^>]*?) -->\n)?```(?P<lang>yaml|python|t
 def snippets(page: Path) -> list[tuple[int, str, str, str]]:
     """(line, language, mark, text) of each checked snippet of ``page``, in page order."""
     text = page.read_text()
-    return [
+    found = [
         (text.count("\n", 0, m.start("body")), m["lang"], (m["mark"] or "").strip(), m["body"])
         for m in _FENCE.finditer(text)
     ]
+    fences = len(re.findall(r"```(?:yaml|python|toml)\b", text))
+    assert fences == len(found), f"{_ids(page)}: {fences - len(found)} snippet(s) not at the start of a line"
+    return found
 
 
 def _ids(page: Path) -> str:
@@ -134,7 +138,8 @@ def _check_yaml(page: Path, line: int, body: str, mark: str, scratch: Path, pins
             patch.setattr(scene_module, "SCENE_DIR", scratch)
             World(scene=name).close()
     elif mark == "fragment: keys":
-        loaded = parse_mission(_mission(body, pins, "mission: fragment\ntree: {idle: true}\n"), where)
+        text = _mission(body, pins, "mission: fragment\ntree: {idle: true}\n")
+        loaded = parse_mission(text, where)
         build_world(loaded, loaded.spec.world.seed).close()
     else:
         assert isinstance(data, dict) and "mission" in data, f"{where}: a yaml snippet that is not a mission needs a mark"
