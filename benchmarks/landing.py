@@ -13,7 +13,7 @@ drifts; the platform's size is a static prior. Sensing is at its default
 
 1. §4.2.1 — ``landing_linear`` and ``landing_circular``, 5 runs each
    (seeds 0–4) with the reactive controller, the paper's predictive one as
-   printed (``velocity_feedforward=false``), ours (predictive with the
+   printed (``tracker.velocity_feedforward=false``), ours (predictive with the
    velocity feed-forward, the default) and ours at ``noise_scale`` 0
    (perfect sensors, for reference). Per run: mean absolute x / y error from
    take-off to touchdown (the paper's Fig. 10 statistic), landing error.
@@ -72,10 +72,10 @@ OURS = "predictive + feed-forward"
 PAPER = "predictive (paper)"
 PERFECT = {"world.sensing.noise_scale": "0"}  # perfect sensors: for reference, never a result
 VARIANTS = {  # §4.2.1 controllers: label -> --set overrides
-    "reactive": {"mode": "reactive"},
-    PAPER: {"mode": "predictive", "velocity_feedforward": "false"},
-    OURS: {"mode": "predictive", "velocity_feedforward": "true"},
-    f"{OURS}, noise_scale 0": {"mode": "predictive", "velocity_feedforward": "true", **PERFECT},
+    "reactive": {"tracker.mode": "reactive"},
+    PAPER: {"tracker.mode": "predictive", "tracker.velocity_feedforward": "false"},
+    OURS: {"tracker.mode": "predictive", "tracker.velocity_feedforward": "true"},
+    f"{OURS}, noise_scale 0": {"tracker.mode": "predictive", "tracker.velocity_feedforward": "true", **PERFECT},
 }
 NOMINAL_SPEED = {"v": "0.5", "omega": "0.05"}
 DEMANDING_SPEED = {"v": "0.7", "omega": "0.07"}
@@ -83,10 +83,10 @@ NOMINAL = f"0.5 m/s, 0.05 rad/s, {OURS}"
 DEMANDING = f"0.7 m/s, 0.07 rad/s, {OURS}"
 GUSTY = f"0.5 m/s, 0.05 rad/s, {OURS}, 3 m/s gusts, 10 % frame drops"
 LIFELONG = {  # life-long runs: label -> --set overrides (Table 2: paper's controller, ours, ours at noise_scale 0)
-    "0.5 m/s, 0.05 rad/s, predictive (paper)": {**NOMINAL_SPEED, "velocity_feedforward": "false"},
+    "0.5 m/s, 0.05 rad/s, predictive (paper)": {**NOMINAL_SPEED, "tracker.velocity_feedforward": "false"},
     NOMINAL: NOMINAL_SPEED,
     f"{NOMINAL}, noise_scale 0": {**NOMINAL_SPEED, **PERFECT},
-    "0.7 m/s, 0.07 rad/s, predictive (paper)": {**DEMANDING_SPEED, "velocity_feedforward": "false"},
+    "0.7 m/s, 0.07 rad/s, predictive (paper)": {**DEMANDING_SPEED, "tracker.velocity_feedforward": "false"},
     DEMANDING: DEMANDING_SPEED,
     f"{DEMANDING}, noise_scale 0": {**DEMANDING_SPEED, **PERFECT},
     GUSTY: {**NOMINAL_SPEED, "world.disturbances": GUSTS},

@@ -44,8 +44,8 @@ def test_missions_load_and_compile_with_the_five_state_cycle(name):
 
 def test_set_overrides_reach_the_skills():
     nodes = _nodes("landing_lifelong", {
-        "cycles": "3", "v": "0.7", "omega": "0.07", "mode": "reactive", "gain_schedule": "manual_fit",
-        "nominal_height": "3.0", "land_after": "6", "final_height": "0.6", "run.tick_hz": "10",
+        "cycles": "3", "v": "0.7", "omega": "0.07", "tracker.mode": "reactive", "tracker.gain_schedule": "manual_fit",
+        "tracker.nominal_height": "3.0", "cycle.land_after": "6", "cycle.final_height": "0.6", "run.tick_hz": "10",
     })
     assert (nodes[DrivePattern].params.v, nodes[DrivePattern].params.omega) == (0.7, 0.07)
     for skill in (Takeoff, Follow, Land, Relocalize):
@@ -55,7 +55,7 @@ def test_set_overrides_reach_the_skills():
     assert nodes[FlightTime].params.seconds == 6.0 and nodes[FlightTime].params.since == "takeoff"
     mission = load_mission("landing_lifelong", {"cycles": "3"})
     assert mission.spec.tree.parallel[1].times == 3
-    linear = _nodes("landing_linear", {"velocity_feedforward": "false"})
+    linear = _nodes("landing_linear", {"tracker.velocity_feedforward": "false"})
     assert linear[DrivePattern].params.pattern == "linear" and linear[FlightTime].params.since == "tracking"
     assert linear[Follow].params.tracker_config().path_time_s == 0.1  # the paper's predictive controller
 
@@ -73,7 +73,7 @@ def test_a_mission_swaps_the_tracking_skill_by_name():
         assert isinstance(node, cls) and node.params.tracker_config().mode == mode
     text = load_mission("landing_circular").text.replace(
         "tree:", "plugins: {follow: marsupial.skills.landing.skills:TrackReactive}\ntree:", 1)
-    follow = next(n for n in compile_mission(parse_mission(text, "swap.yaml", {"mode": "reactive"})).nodes
+    follow = next(n for n in compile_mission(parse_mission(text, "swap.yaml", {"tracker.mode": "reactive"})).nodes
                   if isinstance(n, Follow))
     assert isinstance(follow, TrackReactive)
     with pytest.raises(MissionError, match="mode: invalid value 'predictive'"):  # the pinned skill is reactive only
@@ -83,11 +83,12 @@ def test_a_mission_swaps_the_tracking_skill_by_name():
 @pytest.mark.parametrize(
     "override, message",
     [
-        ("mode=fast", "mode: invalid value 'fast'"),
-        ("nominal_height=high", "nominal_height: invalid value 'high'; expected a number"),
-        ("gain_schedule=fitted", "gain_schedule: invalid value 'fitted'"),
+        ("tracker.mode=fast", "mode: invalid value 'fast'"),
+        ("tracker.nominal_height=high", "nominal_height: invalid value 'high'; expected a number"),
+        ("tracker.gain_schedule=fitted", "gain_schedule: invalid value 'fitted'"),
         ("cycles=many", "times: invalid value 'many'; expected an integer"),
-        ("velocity_feedforward=maybe", "velocity_feedforward: invalid value 'maybe'"),
+        ("tracker.velocity_feedforward=maybe", "velocity_feedforward: invalid value 'maybe'"),
+        ("cycle.final_hight=0.6", "unknown key 'params.cycle.final_hight'"),
     ],
 )
 def test_wrong_parameter_types_exit_2_at_compile_time(override, message):

@@ -45,7 +45,7 @@ def _assert_rides_the_platform(log):
 
 
 def test_one_cycle_on_the_circular_track_lands_on_the_platform(tmp_path):
-    result, log = _run(tmp_path, "landing_circular", track_seconds=2.0)
+    result, log = _run(tmp_path, "landing_circular", **{"cycle.land_after": 2.0})
     assert result.outcome == "success" and log.outcome == "success"
     states = [s for _, s, _ in _states(log)]
     assert states == ["taking_off", "tracking", "landing", "landed"]  # the paper's state machine, §3.1
@@ -58,7 +58,7 @@ def test_one_cycle_on_the_circular_track_lands_on_the_platform(tmp_path):
 
 def test_an_occluded_platform_triggers_relocalize_and_the_cycle_completes(tmp_path):
     occlusion = "{occlusion: {robot: ugv, link: landing_platform, start: 6.0, duration: 1.5}}"
-    result, log = _run(tmp_path, "landing_circular", track_seconds=2.0, **{"world.disturbances": occlusion})
+    result, log = _run(tmp_path, "landing_circular", **{"cycle.land_after": 2.0, "world.disturbances": occlusion})
     assert result.outcome == "success"
     states = _states(log)
     relocalizing = [(t, why) for t, s, why in states if s == "relocalizing"]
@@ -79,9 +79,8 @@ def test_at_10_hz_with_gusts_the_uav_lands_on_the_moving_platform(tmp_path):
     # the touchdown test reads every IMU sample of its window, not one per tick: at a 10 Hz tick rate the
     # platform's vibration is not aliased away into "landed on the ground" (§3.3.1)
     gusts = "{wind: {gust: 3.0}}"
-    result, log = _run(
-        tmp_path, "landing_circular", track_seconds=2.0, **{"run.tick_hz": 10, "world.disturbances": gusts}
-    )
+    overrides = {"cycle.land_after": 2.0, "run.tick_hz": 10, "world.disturbances": gusts}
+    result, log = _run(tmp_path, "landing_circular", **overrides)
     assert result.outcome == "success"
     outcome = next(e for e in log.events if e["kind"] == "outcome" and e["skill"] == "land")
     assert outcome["status"] == "SUCCESS" and "landed on the moving platform" in outcome["message"]
@@ -99,7 +98,7 @@ team:
 run: {tick_hz: 30, until: 60}
 tree:
   subtree: landing_cycle
-  params: {uav: uav, platform: ugv, land_after: 0.5, land_after_since: tracking, nominal_height: 2.0}
+  params: {uav: uav, platform: ugv, land_after: 0.5, land_after_since: tracking, tracker: {nominal_height: 2.0}}
 """
 
 

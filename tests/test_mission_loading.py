@@ -158,7 +158,7 @@ def test_json_schema_describes_missions_and_accepts_a_valid_one():
     assert set(schema["properties"]) == {"mission", "description", "world", "team", "operator", "plugins",
                                          "params", "run", "tree"}
     assert schema["properties"]["tree"]["$ref"] == "#/$defs/Node"
-    assert len(defs["Node"]["oneOf"]) == 12
+    assert len(defs["Node"]["oneOf"]) == 15
     assert defs["SequenceNode"]["additionalProperties"] is False
     assert defs["ParallelNode"]["properties"]["success_on"]["enum"] == ["all", "one"]
     assert {"$ref": "#/$defs/Guard"} in defs["PriorityEntry"]["properties"]["when"]["anyOf"]

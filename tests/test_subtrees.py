@@ -4,6 +4,8 @@ from pathlib import Path
 
 import pytest
 
+import marsupial.missions
+
 from marsupial.trees.errors import MissionError
 from marsupial.trees.mission import SequenceNode, SkillNode, display_path, load_mission, parse_mission
 from marsupial.trees.subtrees import known_subtrees, resolve_references
@@ -96,8 +98,9 @@ def test_unknown_subtree_parameter_suggests_a_declared_one():
 
 def test_missing_required_subtree_parameter():
     error = error_of(f"mission: m\n{TEAM}tree: {{subtree: go_and_hover, params: {{robot: uav}}}}\n")
+    declared = display_path(Path(marsupial.missions.__file__).parent / "subtrees" / "go_and_hover.yaml")
     assert str(error) == ("here.yaml:3:31: tree.params: subtree 'go_and_hover' needs parameter target; "
-                          "expected params with target")
+                          f"expected params with target (declared required: target at {declared}:5:3)")
 
 
 def test_errors_inside_a_subtree_point_into_its_file(tmp_path):

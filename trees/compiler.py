@@ -17,6 +17,8 @@ invert         ``decorators.Inverter``
 until          ``Selector(memory=False)[guard, SuccessIsRunning(child)]``: the
                child is restarted whenever it succeeds, until the guard holds
                (SUCCESS); a failing child fails the node
+wait_until,    :mod:`~.waiting` (:func:`~.waiting.build_waiting`): ``WaitUntil``,
+run_for, idle  ``RunFor``, ``Idle``
 skill          the registered :class:`~.skill.Skill` class
 condition      the registered :class:`~.skill.Condition` class
 =============  ==================================================================
@@ -48,6 +50,7 @@ from .mission import Guard, Mission, NodeBase
 from .operator import CONTROL_COMMANDS
 from .registry import Registry
 from .skill import Condition, MissionNode, RunContext, Skill
+from .waiting import WAITING_KINDS, build_waiting
 
 
 @dataclass
@@ -113,6 +116,8 @@ class _Compiler:
             return self.leaf(kind, getattr(node, kind), node.robot, node.params, node, node.name)
         if kind == "subtree":
             raise self.mission.error_at(node, f"subtree '{node.subtree}' was not expanded")
+        if kind in WAITING_KINDS:
+            return build_waiting(self, node)
         name = self.unique(node.name or kind)
         if kind == "sequence":
             return py_trees.composites.Sequence(name, memory=node.memory, children=[self.build(c) for c in node.sequence])

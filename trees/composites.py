@@ -3,7 +3,7 @@
 * :class:`Priorities` — a memoryless ``Selector`` whose children are
   :class:`GuardedBranch` es (``Sequence(guard..., do)``, guards re-evaluated
   every tick). When a higher-priority branch takes over from a running
-  lower one, each skill that was running in the lower branch is recorded as
+  lower one, each skill or idle node that was running in the lower branch is recorded as
   a ``preemption`` event (``preempted``, ``by``, ``why``, ``robot``, and
   ``stop``: ``"safe_stop"`` when its safe-stop was applied, ``"kept by <node>"``
   when the preempting node already drives that robot in this tick).
@@ -51,9 +51,9 @@ class GuardedBranch(py_trees.composites.Sequence):
                     channel.handle(guard.params.command)
 
 
-def running_skills(node: Behaviour) -> list[Skill]:
-    """Skills of ``node``'s subtree that are RUNNING."""
-    return [n for n in node.iterate() if isinstance(n, Skill) and n.status == Status.RUNNING]
+def running_leaves(node: Behaviour) -> list[Behaviour]:
+    """Leaves of ``node``'s subtree that are RUNNING: skills, and nodes that only wait (``idle``)."""
+    return [n for n in node.iterate() if not n.children and n.status == Status.RUNNING]
 
 
 class Priorities(py_trees.composites.Selector):
@@ -71,13 +71,13 @@ class Priorities(py_trees.composites.Selector):
 
     def tick(self):  # noqa: ANN201 (a py_trees generator)
         before = self.current_child if self.status == Status.RUNNING else None
-        running = running_skills(before) if before is not None else []
+        running = running_leaves(before) if before is not None else []
         for node in super().tick():
             if node is self and before is not None:
                 self._record_preemption(before, running)
             yield node
 
-    def _record_preemption(self, before: Behaviour, running: list[Skill]) -> None:
+    def _record_preemption(self, before: Behaviour, running: list[Behaviour]) -> None:
         now = self.current_child
         if now is None or now is before or self.status == Status.FAILURE:
             return
@@ -87,28 +87,34 @@ class Priorities(py_trees.composites.Selector):
         why = now.describe() if isinstance(now, GuardedBranch) else "default branch"
         if not running:
             self.context.event("preemption", preempted=before.name, by=by, why=why, robot=None, stop=None)
-        for skill in running:
+        for leaf in running:
             self.context.event(
                 "preemption",
-                preempted=skill.name,
+                preempted=leaf.name,
                 by=by,
                 why=why,
-                robot=skill.robot_name,
-                stop=stop_text(skill),
+                robot=getattr(leaf, "robot_name", None),
+                stop=stop_text(leaf),
             )
 
 
-def stop_text(skill: Skill) -> str | None:
-    """How a stopped skill left its robot: ``"safe_stop"``, ``"kept by <node>"``, ``None`` (no robot)."""
-    if not skill.uses_robot or skill.robot_name is None:
+def stop_text(leaf: Behaviour) -> str | None:
+    """How a stopped leaf left its robot: ``"safe_stop"``, ``"kept by <node>"``, ``None`` (no robot, or not a skill)."""
+    skill = leaf
+    if not isinstance(skill, Skill) or not skill.uses_robot or skill.robot_name is None:
         return None
     return "safe_stop" if skill.stopped_by is None else f"kept by {skill.stopped_by.node_name}"
 
 
 class SimTimeout(py_trees.decorators.Decorator):
-    """Fail (stopping the child) when the child runs longer than ``seconds`` of simulated time."""
+    """Fail (stopping the child) when the child runs longer than ``seconds`` of simulated time.
 
-    btcpp_tag = "Timeout"  # BehaviorTree.CPP export (trees/btxml.py)
+    A subclass sets ``expired`` (the status when the time is up) and ``expired_text`` (its feedback).
+    """
+
+    btcpp_tag: str | None = "Timeout"  # BehaviorTree.CPP export (trees/btxml.py)
+    expired = Status.FAILURE
+    expired_text = "timed out after {seconds:g} s"
 
     def __init__(self, name: str, child: Behaviour, seconds: float, clock: Callable[[], float]):
         super().__init__(name=name, child=child)
@@ -129,7 +135,7 @@ class SimTimeout(py_trees.decorators.Decorator):
             return self.decorated.status
         left = self._deadline - self._clock()
         if left <= 1e-9:
-            self.feedback_message = f"timed out after {self.seconds:g} s"
-            return Status.FAILURE
+            self.feedback_message = self.expired_text.format(seconds=self.seconds)
+            return self.expired
         self.feedback_message = f"{left:.1f} s left"
         return Status.RUNNING

@@ -1,4 +1,4 @@
-"""Subtrees: reusable trees with named parameters, inlined into a mission; ``${name}`` substitution.
+"""Subtrees: reusable trees with named parameters, inlined into a mission; ``${name}`` substitution, ``<<`` merges.
 
 A subtree file (``missions/subtrees/<name>.yaml``, or any file given by path)::
 
@@ -16,6 +16,12 @@ whole string is the reference, formatted into the text otherwise (``$$`` is a
 literal ``$``). Inside a subtree, names are the subtree's parameters, then the
 mission's ``params``. Include cycles are an error naming the cycle and the
 include line.
+
+Settings groups: ``<<: "${group}"`` in a mapping merges the mapping that
+parameter holds (keys written beside it win), so a group of settings is passed
+at once (``params: {<<: "${tracker}", platform: ugv}``). A subtree parameter
+whose default is a non-empty mapping is a group: an include's mapping for it
+updates the default key by key, and unknown keys are errors.
 
 Subtree files are read only from inside the mission's folder and the
 package's ``missions/`` folder, or from the folders listed in the
@@ -74,7 +80,11 @@ def resolve_references(
 
     def resolve(value: Any, path: tuple) -> Any:
         if isinstance(value, dict):
-            return {k: resolve(v, path + (k,)) for k, v in value.items()}
+            resolved = {k: resolve(v, path + (k,)) for k, v in value.items() if k != MERGE_KEY}
+            if MERGE_KEY not in value:
+                return resolved
+            group = resolve(value[MERGE_KEY], path + (MERGE_KEY,))
+            return merge_group(group, value[MERGE_KEY], resolved, path, source, result, note)
         if isinstance(value, list):
             return [resolve(v, path + (i,)) for i, v in enumerate(value)]
         if not isinstance(value, str) or "$" not in value:
@@ -97,6 +107,35 @@ def resolve_references(
 
     result.data = resolve(data, tuple(key_path))
     return result
+
+
+MERGE_KEY = "<<"
+
+
+def merge_group(
+    group: Any, written: Any, explicit: dict, path: tuple, source: SourceDoc, result: Resolved, note: str | None
+) -> dict:
+    """``explicit`` (a mapping at ``path``) over the settings ``group`` that its ``<<: "${name}"`` key merges.
+
+    Keys written beside ``<<`` win. A merged key is located at the ``<<`` key (its position is recorded in
+    ``source``) and annotated with the group's origin; a group that is not a mapping is an error there.
+    """
+    at = path + (MERGE_KEY,)
+    if isinstance(group, str) and group == written and "${" in written:  # an unknown name, already reported
+        return explicit
+    if not isinstance(written, str) or _REFERENCE.fullmatch(written) is None or not isinstance(group, Mapping):
+        shown = f"'{written}' is {group!r}" if isinstance(written, str) else f"got {written!r}"
+        result.unknown.append(source.error(
+            at, f"'<<' merges a mapping of settings, {shown}",
+            expected="'<<: \"${name}\"' naming a parameter whose value is a mapping", note=note,
+        ))
+        return explicit
+    origin = result.notes.get(at)
+    for key in group:
+        source.positions.setdefault(path + (key,), source.locate(at))
+        if key not in explicit and origin:
+            result.notes[path + (key,)] = origin
+    return {**group, **explicit}
 
 
 class SubtreeSpec(BaseModel):
@@ -226,15 +265,42 @@ class _Expander:
                     node.key_path + ("params", name), f"unknown parameter '{name}' of subtree '{node.subtree}'",
                     expected=f"a declared parameter ({one_of(declared)})", suggestion=suggest(name, declared),
                 )
-        values = {**declared, **node.params}
+        values = {
+            name: self.settings(node, (name,), declared[name], value) for name, value in node.params.items()
+        }
+        values = {**declared, **values}
         missing = [name for name, value in values.items() if value is None and declared[name] is None]
         if missing:
+            where = ", ".join(f"{name} at {sub.source.where(('params', name))}" for name in missing)
             raise self.mission.error_at(
                 node.key_path + ("params",),
                 f"subtree '{node.subtree}' needs parameter{'s' if len(missing) > 1 else ''} {', '.join(missing)}",
-                expected=f"params with {', '.join(missing)}",
+                expected=f"params with {', '.join(missing)} (declared required: {where})",
             )
         return values
+
+    def settings(self, node: SubtreeNode, rel: tuple, default: Any, value: Any) -> Any:
+        """``value`` given for a subtree parameter (at ``params`` + ``rel`` of the include) over its ``default``.
+
+        A default that is a non-empty mapping is a settings group: a mapping given for it updates it key
+        by key (recursively), and its keys must be the default's.
+        """
+        if not isinstance(default, Mapping) or not default or value is None:
+            return value
+        at = node.key_path + ("params", *rel)
+        group = ".".join(map(str, rel))
+        if not isinstance(value, Mapping):
+            raise self.mission.error_at(
+                at, f"'{group}' of subtree '{node.subtree}' is a settings group, got {value!r}",
+                expected=f"a mapping with some of {', '.join(default)}",
+            )
+        for key in value:
+            if key not in default:
+                raise self.mission.error_at(
+                    at + (key,), f"unknown setting '{key}' in group '{group}' of subtree '{node.subtree}'",
+                    expected=f"a setting of the group ({one_of(default)})", suggestion=suggest(key, default),
+                )
+        return {**default, **{k: self.settings(node, rel + (k,), default[k], v) for k, v in value.items()}}
 
     def origins(self, node: SubtreeNode, sub: _SubtreeFile, arguments: Mapping[str, Any]) -> dict[str, str]:
         """Where each subtree parameter got its value: the include's ``params``, else the declared default."""

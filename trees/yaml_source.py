@@ -32,6 +32,7 @@ MAX_DEPTH = 64  # levels of nested mappings and lists
 
 _BOOL_TAG = "tag:yaml.org,2002:bool"
 _FLOAT_TAG = "tag:yaml.org,2002:float"
+_MERGE_TAG = "tag:yaml.org,2002:merge"
 
 
 class _Loader(yaml.SafeLoader):
@@ -104,6 +105,14 @@ def _parse_error(exc: yaml.YAMLError, file: str) -> MissionError:
     return MissionError(message, file, line, column)
 
 
+def _is_group_merge(key_node: yaml.Node, value_node: yaml.Node) -> bool:
+    """Whether a mapping entry is ``<<: "${name}"`` (a merge of a parameter group), not YAML's ``<<: *anchor``."""
+    return (
+        key_node.tag == _MERGE_TAG and isinstance(value_node, yaml.ScalarNode)
+        and "${" in str(value_node.value)
+    )
+
+
 def _build(loader: _Loader, node: yaml.Node, path: tuple, doc: SourceDoc, budget: list[int]) -> Any:
     """Plain value of ``node``, recording positions under ``path``; duplicate keys are errors.
 
@@ -119,10 +128,12 @@ def _build(loader: _Loader, node: yaml.Node, path: tuple, doc: SourceDoc, budget
         )
     if isinstance(node, yaml.MappingNode):
         seen: dict[Any, yaml.Node] = {}
-        for key_node, _ in node.value:
+        for key_node, value_node in node.value:
+            if _is_group_merge(key_node, value_node):
+                key_node.tag = "tag:yaml.org,2002:str"  # <<: "${group}" merges a parameter later (trees/subtrees.py)
             if isinstance(key_node, yaml.ScalarNode):
-                key = loader.construct_object(key_node)
-                if key in seen and key != "<<":
+                key = "<<" if key_node.tag == _MERGE_TAG else loader.construct_object(key_node)
+                if key in seen and (key != "<<" or key_node.tag == seen[key].tag == "tag:yaml.org,2002:str"):
                     first_line = seen[key].start_mark.line + 1
                     line, column = _position(key_node.start_mark)
                     raise MissionError(

@@ -29,6 +29,7 @@ from .nodes import (
     NODE_KINDS,
     ConditionNode,
     Guard,
+    IdleNode,
     InvertNode,
     KeyPath,
     Node,
@@ -38,13 +39,16 @@ from .nodes import (
     PriorityEntry,
     RepeatNode,
     RetryNode,
+    RunForNode,
     SelectorNode,
     SequenceNode,
     SkillNode,
     SubtreeNode,
     TimeoutNode,
     UntilNode,
+    WaitUntilNode,
     node_kind,
+    structural_keys,
 )
 from .overrides import apply_overrides
 from .schema import mission_schema
@@ -65,11 +69,11 @@ from .validation import (
 )
 
 __all__ = [
-    "MAX_REPORTED_ERRORS", "NODE_CLASSES", "NODE_KINDS", "ConditionNode", "Guard", "InvertNode", "KeyPath",
-    "Mission", "MissionSpec", "Node", "NodeBase", "OperatorEvent", "ParallelNode", "PrioritiesNode",
-    "PriorityEntry", "RepeatNode", "RetryNode", "RunSpec", "SelectorNode", "SensingSpec", "SequenceNode",
-    "SkillNode", "SubtreeNode", "TeamLinkSpec", "TeamMember", "TimeoutNode", "UntilNode", "WorldSpec",
-    "apply_overrides", "display_path", "errors_from_validation", "find_mission", "known_missions",
-    "load_mission", "mission_dir", "mission_schema", "node_kind", "parse_mission", "validate_source",
-    "validation_errors",
+    "MAX_REPORTED_ERRORS", "NODE_CLASSES", "NODE_KINDS", "ConditionNode", "Guard", "IdleNode", "InvertNode",
+    "KeyPath", "Mission", "MissionSpec", "Node", "NodeBase", "OperatorEvent", "ParallelNode", "PrioritiesNode",
+    "PriorityEntry", "RepeatNode", "RetryNode", "RunForNode", "RunSpec", "SelectorNode", "SensingSpec",
+    "SequenceNode", "SkillNode", "SubtreeNode", "TeamLinkSpec", "TeamMember", "TimeoutNode", "UntilNode",
+    "WaitUntilNode", "WorldSpec", "apply_overrides", "display_path", "errors_from_validation", "find_mission",
+    "known_missions", "load_mission", "mission_dir", "mission_schema", "node_kind", "parse_mission",
+    "structural_keys", "validate_source", "validation_errors",
 ]

@@ -93,7 +93,9 @@ class Mission:
 
 
 def _param_origins(source: SourceDoc, params: Mapping[str, Any], overrides: Mapping[str, str]) -> dict[str, str]:
-    set_by = {key.removeprefix("params."): f"set by --set {key}={value}" for key, value in overrides.items()}
+    set_by = {  # a whole parameter (name=…) or a key of a settings group (group.key=…)
+        key.removeprefix("params.").split(".")[0]: f"set by --set {key}={value}" for key, value in overrides.items()
+    }
     return {name: set_by.get(name) or f"set at {source.where(('params', name))}" for name in params}
 
 

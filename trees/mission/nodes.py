@@ -19,6 +19,7 @@ from pydantic import (
     Field,
     PrivateAttr,
     Tag,
+    field_validator,
     model_validator,
 )
 from pydantic_core import PydanticCustomError
@@ -51,23 +52,30 @@ class KeyPath(tuple):
 # --------------------------------------------------------------------------- nodes
 
 NODE_KINDS = (
-    "sequence", "selector", "parallel", "priorities", "repeat", "retry",
-    "timeout", "invert", "until", "skill", "condition", "subtree",
+    "sequence", "selector", "parallel", "priorities", "repeat", "retry", "timeout", "invert", "until",
+    "run_for", "wait_until", "idle", "skill", "condition", "subtree",
 )  # the structural keys: a node mapping has exactly one of them
+
+#: node type -> structural key it also carries as an ordinary field (``until``'s guard, ``wait_until``'s time limit)
+_SHARED_KEYS = {"until": "condition", "wait_until": "timeout"}
+
+
+def structural_keys(value: Mapping) -> list[str]:
+    """The node-type keys of a node mapping, ``until``'s ``condition`` and ``wait_until``'s ``timeout`` left out."""
+    kinds = [k for k in NODE_KINDS if k in value]
+    for kind, field_name in _SHARED_KEYS.items():
+        if kind in kinds and field_name in kinds:
+            kinds.remove(field_name)
+    return kinds
 
 
 def node_kind(value: Any) -> str | None:
-    """The node type of a node mapping (its single structural key), or ``None`` if it has none or several.
-
-    ``until`` nodes also carry a ``condition:`` guard, which is then not a structural key.
-    """
+    """The node type of a node mapping (its single structural key), or ``None`` if it has none or several."""
     if isinstance(value, NodeBase):
         return value.kind
     if not isinstance(value, Mapping):
         return None
-    kinds = [k for k in NODE_KINDS if k in value]
-    if "until" in kinds and "condition" in kinds:
-        kinds.remove("condition")  # the until node's guard
+    kinds = structural_keys(value)
     return kinds[0] if len(kinds) == 1 else None
 
 
@@ -330,6 +338,57 @@ class UntilNode(_Decorator):
         self.condition._key_path = key_path + ("condition",)
 
 
+#: a duration in simulated seconds: a finite number > 0 (not a boolean, not a string)
+Seconds = Annotated[float, Field(gt=0, allow_inf_nan=False, strict=True)]
+
+
+class RunForNode(_Decorator):
+    """`run_for: node` — run the child for `seconds` of simulated time: success if it is still running then
+    (it is stopped), else the child's own result (a failure stays a failure)."""
+
+    kind: ClassVar[str] = "run_for"
+    run_for: Node = Field(description="Child to run.")
+    seconds: Seconds = Field(description="How long to run it (simulated seconds).")
+
+
+class WaitUntilNode(NodeBase):
+    """`wait_until: guard` — running (commanding nothing) until the guard holds, then success;
+    with `timeout`, failure when it has not held after that many simulated seconds."""
+
+    kind: ClassVar[str] = "wait_until"
+    wait_until: Guard = Field(description="Guard to wait for, e.g. {stored: carrier, robot: uav}.")
+    timeout: Seconds | None = Field(None, description="Fail after this many simulated seconds (none: wait forever).")
+
+    @property
+    def label(self) -> str:
+        """``name`` if given, else ``"wait until <condition>"``."""
+        return self.name or f"wait until {self.wait_until.condition}"
+
+    def guards(self) -> list[Guard]:
+        """The guard waited for."""
+        return [self.wait_until]
+
+    def set_key_path(self, key_path: KeyPath) -> None:
+        super().set_key_path(key_path)
+        self.wait_until._key_path = key_path + ("wait_until",)
+
+
+class IdleNode(NodeBase):
+    """`idle: true` — running forever, commanding nothing (a branch that only waits to be stopped)."""
+
+    kind: ClassVar[str] = "idle"
+    idle: bool = Field(description="Always true.", json_schema_extra={"const": True})
+
+    @field_validator("idle", mode="before")
+    @classmethod
+    def _only_true(cls, value: Any) -> bool:
+        if value is not True:
+            raise PydanticCustomError(
+                "idle_true", f"idle takes true, got {value!r}", {"expected": "true (idle: true)"}
+            )
+        return value
+
+
 class SkillNode(NodeBase):
     """`skill: name` — run a skill (a plug-in behaviour) on a robot with parameters."""
 
@@ -368,6 +427,9 @@ Node: TypeAlias = Annotated[
         Annotated[TimeoutNode, Tag("timeout")],
         Annotated[InvertNode, Tag("invert")],
         Annotated[UntilNode, Tag("until")],
+        Annotated[RunForNode, Tag("run_for")],
+        Annotated[WaitUntilNode, Tag("wait_until")],
+        Annotated[IdleNode, Tag("idle")],
         Annotated[SkillNode, Tag("skill")],
         Annotated[ConditionNode, Tag("condition")],
         Annotated[SubtreeNode, Tag("subtree")],

@@ -41,8 +41,9 @@ def apply_overrides(data: dict, overrides: Mapping[str, str], file: str | None =
     """Set ``--set key=value`` overrides in mission ``data`` (in place); values are parsed as YAML.
 
     A key is a dotted path (``params.cruise_height``, ``world.seed``,
-    ``run.until``, ``team.uav.pose.2``) or a bare mission parameter name
-    (``cruise_height``). Returns key path -> ``"--set key=value"`` of each
+    ``run.until``, ``team.uav.pose.2``), a bare mission parameter name
+    (``cruise_height``) or a dotted path into a mission parameter that is a
+    mapping (``tracker.mode`` for ``params.tracker.mode``). Returns key path -> ``"--set key=value"`` of each
     override (to annotate later validation errors). An unknown key raises a
     :class:`MissionError` listing the close names.
     """
@@ -51,6 +52,14 @@ def apply_overrides(data: dict, overrides: Mapping[str, str], file: str | None =
     for key, text in overrides.items():
         shown = f"--set {key}={text}"
         parts: list[Any] = key.split(".") if "." in key else ["params", key]
+        if parts[0] not in _SECTIONS and parts[0] in params:
+            parts = ["params", *parts]  # a key of a settings group: tracker.mode = params.tracker.mode
+        elif parts[0] not in _SECTIONS:
+            raise MissionError(
+                f"{shown}: '{parts[0]}' is neither a mission section nor a mission parameter", file,
+                expected=f"a section ({one_of(_SECTIONS)}) or a mission parameter ({one_of(params)})",
+                suggestion=suggest(parts[0], list(_SECTIONS) + list(params)),
+            )
         if "." not in key and key not in params:
             names = [f"params.{p}" for p in params] + [f"{s}." for s in _SECTIONS]
             raise MissionError(

@@ -21,7 +21,7 @@ from pydantic import (
 
 from ..errors import KeyPathLike, MissionError, combine_errors, one_of, suggest
 from ..yaml_source import SourceDoc
-from .nodes import NODE_CLASSES, NODE_KINDS
+from .nodes import NODE_CLASSES, NODE_KINDS, structural_keys
 
 MAX_REPORTED_ERRORS = 5
 
@@ -134,7 +134,7 @@ def _node_error(walk: _LocWalk) -> tuple[tuple, str, str, str | None]:
     if not isinstance(value, Mapping):
         expected = f"a mapping with one of {', '.join(NODE_KINDS)} (e.g. {{skill: wait}})"
         return walk.path, f"expected a node, got {_show(value)}", expected, None
-    present = [k for k in NODE_KINDS if k in value]
+    present = structural_keys(value)
     if len(present) > 1:
         found = ", ".join(f"'{k}'" for k in present)
         return walk.path, f"a node has exactly one node type key, found {found}", kinds, None
