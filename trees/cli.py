@@ -189,7 +189,7 @@ def skills(names: tuple[str, ...]) -> None:
             except MissionError as err:
                 console.print(Text.assemble(f"{kind} {name} ({provider}): ", (str(err), "red")))
                 continue
-            kinds = "no robot" if not cls.uses_robot else ", ".join(cls.robot_kinds or ("any robot",))
+            kinds = "no robot" if not cls.uses_robot else ", ".join(c.__name__ for c in cls.robot_kinds or ()) or "any robot"
             primary = f" Primary: {cls.primary}." if getattr(cls, "primary", None) else ""
             table.caption = Text(f"{cls.summary()} Robots: {kinds}.{primary}")
             table.caption_justify = "left"

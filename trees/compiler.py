@@ -24,8 +24,10 @@ condition      the registered :class:`~.skill.Condition` class
 Checked here, each error at the node's file:line (:meth:`Mission.error_at`):
 unknown skill/condition names (with the closest name), ambiguous providers,
 parameter types and values (each skill's pydantic ``Params``), the robot a
-node needs and its kind, blackboard keys read but written by no node, and
-scripted operator commands nobody listens to.
+node needs and its capabilities and sensors, team members named by
+parameters (:class:`~.skill.TeamMember`) and their capabilities, two parallel
+branches claiming one resource of one robot, blackboard keys read but
+written by no node, and scripted operator commands nobody listens to.
 """
 
 from __future__ import annotations
@@ -47,6 +49,7 @@ from .errors import MissionError, one_of, suggest
 from .mission import Guard, Mission, NodeBase
 from .operator import CONTROL_COMMANDS
 from .registry import Registry
+from .resources import ResourceChecks, kind_capabilities, members_with, team_member_of
 from .skill import Condition, MissionNode, RunContext, Skill
 
 
@@ -79,13 +82,9 @@ class CompiledTree:
         return sum(1 for _ in self.root.iterate())
 
 
-def robot_kind_matches(kind: str, accepted: tuple[str, ...] | None) -> bool:
-    """Whether robot ``kind`` is among ``accepted`` kind names or robot class names (its class or a base)."""
-    if accepted is None or kind in accepted:
-        return True
-    from marsupial.world.robots import robot_class
-
-    return any(cls.__name__ in accepted for cls in robot_class(kind).__mro__)
+def robot_kind_matches(kind: str, accepted: tuple[type, ...] | None) -> bool:
+    """Whether robots of ``kind`` have every capability in ``accepted`` (``None``: any robot)."""
+    return accepted is None or set(accepted) <= kind_capabilities(kind)
 
 
 class _Compiler:
@@ -98,6 +97,7 @@ class _Compiler:
         self.registry = registry
         self.leaves: list[tuple[MissionNode, Any]] = []  # (node, where it was written)
         self.names: dict[str, int] = {}
+        self.resources = ResourceChecks(mission)
 
     # ---------------------------------------------------------------- names
     def unique(self, name: str) -> str:
@@ -120,7 +120,7 @@ class _Compiler:
             return py_trees.composites.Selector(name, memory=node.memory, children=[self.build(c) for c in node.selector])
         if kind == "parallel":
             policy = ParallelPolicy.SuccessOnAll() if node.success_on == "all" else ParallelPolicy.SuccessOnOne()
-            return py_trees.composites.Parallel(name, policy=policy, children=[self.build(c) for c in node.parallel])
+            return py_trees.composites.Parallel(name, policy=policy, children=self.parallel_branches(node.parallel))
         if kind == "priorities":
             return Priorities(name, [self.entry(e) for e in node.priorities], self.context)
         if kind == "repeat":
@@ -137,6 +137,16 @@ class _Compiler:
             again = py_trees.decorators.SuccessIsRunning(self.unique(f"{child.name} (again)"), child)
             return py_trees.composites.Selector(name, memory=False, children=[guard, again])
         raise self.mission.error_at(node, f"unknown node type '{kind}'")  # the model admits no other
+
+    def parallel_branches(self, branches: Iterable[NodeBase]) -> list[Behaviour]:
+        """The branches of a ``parallel``, checked not to claim one resource of one robot twice."""
+        built, leaves = [], []
+        for branch in branches:
+            first = len(self.leaves)
+            built.append(self.build(branch))
+            leaves.append(self.leaves[first:])
+        self.resources.check_parallel(leaves, self.spec.team)
+        return built
 
     def entry(self, entry: Any) -> Behaviour:
         do = self.build(entry.do)
@@ -194,6 +204,7 @@ class _Compiler:
             if isinstance(where, Guard):
                 raise self.guard_params_error(exc, where, cls) from None
             raise self.mission.validation_error(exc, at + ("params",), cls.Params) from None
+        self.check_members(cls, params, raw_params, robot, where)
         default = f"{type_name}@{robot}" if robot else type_name
         node = cls(self.unique(name or default), params, self.context, robot)
         node.kind = type_name
@@ -211,6 +222,37 @@ class _Compiler:
             except ValidationError as alone:
                 return self.mission.validation_error(alone, guard.key_path + (guard.condition,), info.annotation)
         return self.mission.validation_error(exc, guard.key_path + ("params",), cls.Params)
+
+    def check_members(
+        self, cls: type[MissionNode], params: Any, raw_params: dict[str, Any], robot: str | None, where: Any
+    ) -> None:
+        """Parameters naming team members (:class:`~.skill.TeamMember`) name one, with the capability they require."""
+        team = self.spec.team
+        for field_name, info in type(params).model_fields.items():
+            member = team_member_of(info.annotation, info.metadata)
+            value = getattr(params, field_name)
+            if member is None or value is None:
+                continue
+            if isinstance(where, Guard) and field_name == getattr(cls, "primary", None):
+                at = where.key_path + (where.condition,)
+            elif field_name in raw_params:
+                at = where.key_path + ("params", field_name)
+            else:
+                at = where.key_path
+            given = "" if field_name in raw_params else " (its default)"
+            if value not in team:
+                raise self.mission.error_at(
+                    at, f"parameter '{field_name}' names '{value}'{given}, which is not a team member",
+                    expected=f"a team member ({one_of(team)})", suggestion=suggest(value, team),
+                )
+            if member.capability is not None and not robot_kind_matches(team[value].robot, (member.capability,)):
+                able = members_with(team, (member.capability,))
+                raise self.mission.error_at(
+                    at, f"parameter '{field_name}' names '{value}' (a {team[value].robot}), which lacks capability "
+                    f"{member.capability.__name__}",
+                    expected=f"a team member with capability {member.capability.__name__} "
+                    f"({one_of(able) if able else 'none in this team'})",
+                )
 
     def robot_for(self, cls: type[MissionNode], kind: str, type_name: str, robot: str | None, at: Any) -> str | None:
         team = self.spec.team
@@ -239,10 +281,19 @@ class _Compiler:
                 expected=one_of(err.known), suggestion=suggest(robot_kind, err.known),
             ) from None
         if not matches:
+            needs = " and ".join(c.__name__ for c in cls.robot_kinds or ())
+            able = members_with(team, cls.robot_kinds)
             raise self.mission.error_at(
                 at + ("robot",),
                 f"{kind} '{type_name}' cannot run on '{robot}' (a {robot_kind})",
-                expected=f"a robot whose kind or class is {one_of(cls.robot_kinds or ())}",
+                expected=f"a robot with capability {needs} ({one_of(able) if able else 'none in this team'})",
+            )
+        missing = self.resources.missing_sensors(robot_kind, cls.sensors)
+        if missing:
+            raise self.mission.error_at(
+                at + ("robot",),
+                f"{kind} '{type_name}' reads sensor '{missing[0]}', which '{robot}' (a {robot_kind}) does not have",
+                expected="a robot with the sensors " + ", ".join(cls.sensors),
             )
         return robot
 

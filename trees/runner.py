@@ -407,8 +407,8 @@ def _loop(
             if command.say == "pause" and not paused:
                 paused = True
                 arbiter.new_tick()
-                for robot in world.robots.values():
-                    arbiter.safe_stop(robot, "operator", "operator")
+                for name in world.robots:
+                    arbiter.safe_stop(context.onboard(name), "operator", "operator")
                 context.event("state_change", state="paused")
             elif command.say == "resume" and paused:
                 paused = False

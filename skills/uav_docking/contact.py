@@ -66,9 +66,10 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.trees.skill import Condition, NodeParams, Skill
+from marsupial.world.capabilities import Rotorcraft
 
 from .relative_hold import PART_A_LINK
-from .team import DOCKING_FLAG, carrier_port, phase_event
+from .team import DOCKING_FLAG, CarrierName, carrier_port, phase_event
 from .track import CONTACT_TARGET, TRACKING, ContactTarget, TrackingState
 
 CAPTURE_TIME = 1.0  # s the magnet may take to bring Part B into contact before the capture is retried
@@ -81,11 +82,11 @@ def contact_height(z0: float, t_c: float, k_c: float = K_C) -> float:
     return z0 + k_c * math.log(max(t_c, 0.0) + 1.0)
 
 
-class Contact(Skill):
+class Contact(Skill["Contact.Params"]):
     """After the operator's authorization, raise Part A to the UAV's Part B by eq. (15), then magnet and levers lock it."""
 
     class Params(NodeParams):
-        carrier: str = "carrier"
+        carrier: CarrierName = "carrier"
         """Team member carrying the arm and Part A of the docking device (a mobile_manipulator)."""
         authorization: str | None = "authorize_contact"
         """Operator command that authorizes the contact phase (§IV-B); none: authorized at once (benchmarks)."""
@@ -119,7 +120,8 @@ class Contact(Skill):
         max_cancellations: int = Field(3, ge=0)
         """Cancellations after which the skill fails."""
 
-    robot_kinds = ("Quadrotor",)
+    robot_kinds = (Rotorcraft,)
+    claims = ("{carrier}/docking",)  # the UAV and the arm are track's, which runs beside it
     reads = (f"{{carrier}}/{TRACKING}",)
     writes = (f"{{carrier}}/{CONTACT_TARGET}", f"{{carrier}}/{DOCKING_FLAG}")
 
@@ -287,15 +289,15 @@ class Contact(Skill):
         return Status.RUNNING
 
 
-class Stored(Condition):
+class Stored(Condition["Stored.Params"]):
     """Holds while the UAV is locked on its carrier's Part A and no docking or deployment is in progress."""
 
     class Params(NodeParams):
-        carrier: str = "carrier"
+        carrier: CarrierName = "carrier"
         """Team member whose docking device holds the UAV (a mobile_manipulator)."""
 
     primary: ClassVar[str] = "carrier"
-    robot_kinds = ("Quadrotor",)
+    robot_kinds = (Rotorcraft,)
     reads = (f"{{carrier}}/{DOCKING_FLAG}",)
 
     def check(self) -> bool:

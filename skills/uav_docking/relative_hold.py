@@ -35,11 +35,12 @@ from pydantic import Field
 
 from marsupial.geometry import rot_z, rotation_matrix, transform
 from marsupial.trees.skill import NodeParams, Skill
+from marsupial.world.capabilities import Rotorcraft
 from marsupial.world.onboard import StateEstimate
 
 from .observer import EyeInHandObserver
 from .relative_pose import RelativePose, RelativeState
-from .team import carrier_port
+from .team import CarrierName, carrier_port
 
 PART_A_LINK = "part_a"
 PART_B_LINK = "part_b"
@@ -183,11 +184,11 @@ def relative_pose_of(
     return RelativePose(carrier, skill.context.link(carrier.name), skill.robot_name, observer, gain, gate, since, vision_fixes)
 
 
-class RelativeHold(Skill):
+class RelativeHold(Skill["RelativeHold.Params"]):
     """Hold the UAV at a pose in the carrier's manipulator frame M (above Part A), on the camera-anchored estimate of P_Q^M."""
 
     class Params(NodeParams):
-        carrier: str = "carrier"
+        carrier: CarrierName = "carrier"
         """Team member carrying the arm (a mobile_manipulator); M is its ``arm_base`` frame."""
         height: float = Field(HOLD_HEIGHT, gt=0.0)
         """Height (m) of Part B above Part A of ``arm_pose`` (0.30 m: within the arm's upward range for contact)."""
@@ -204,7 +205,8 @@ class RelativeHold(Skill):
         seconds: float | None = Field(None, gt=0.0)
         """Succeed after holding this long (simulated s); none: hold until stopped."""
 
-    robot_kinds = ("Quadrotor",)
+    robot_kinds = (Rotorcraft,)
+    claims = ("rotors",)
     writes = ("{robot}/hold_error",)
 
     def start(self) -> None:

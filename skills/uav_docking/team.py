@@ -22,14 +22,18 @@ Blackboard keys written by the family, under the carrier's name
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 from marsupial.trees.arbitration import CommandPort
+from marsupial.trees.skill import TeamMember
+from marsupial.world.capabilities import Carrier
 from marsupial.world.errors import UnknownNameError
-from marsupial.world.onboard import CarrierOnboard
 
 if TYPE_CHECKING:
     from marsupial.trees.skill import Skill
+
+#: a parameter naming the carrier a skill works with (checked by the compiler: a team member that is a Carrier)
+CarrierName = Annotated[str, TeamMember(Carrier)]
 
 DOCKING_FLAG = "docking"
 UAV_POSE = "uav_pose_M"
@@ -39,13 +43,12 @@ UAV_STORED = "uav_stored"
 def carrier_port(skill: Skill, name: str) -> CommandPort:
     """The onboard interface of team member ``name`` as ``skill`` commands it (through the run's arbiter).
 
-    It must be a carrier: an arm with its kinematics and a docking device
-    (:class:`~marsupial.world.onboard.CarrierOnboard`, the
-    ``mobile_manipulator``). Raises :class:`UnknownNameError` naming the
+    It must be a :class:`~marsupial.world.capabilities.Carrier`: an arm with
+    its kinematics and a docking device (the ``mobile_manipulator``). Raises :class:`UnknownNameError` naming the
     team's carriers when ``name`` is not one of them.
     """
     context = skill.context
-    carriers = [n for n in context.team() if isinstance(context.onboard(n), CarrierOnboard)]
+    carriers = [n for n in context.team() if isinstance(context.onboard(n), Carrier)]
     if name not in carriers:
         raise UnknownNameError(f"carrier of {skill.name} (a mobile_manipulator)", name, carriers)
     return skill.member(name)

@@ -61,13 +61,14 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.trees.skill import NodeParams, Skill
+from marsupial.world.capabilities import Rotorcraft
 
 from .engine import MotionEngine, MotionEngineParams
 from .pose import invert
 from .relative_hold import PART_A_LINK, CarrierFrame, HoldGains, command_hold, part_b_offset, relative_pose_of
 from .relative_pose import RelativeState
 from .selection import PbvsTarget, SelectionParams, rot_z, yaw_of_rotation
-from .team import DOCKING_FLAG, carrier_port, phase_event
+from .team import DOCKING_FLAG, CarrierName, carrier_port, phase_event
 from .vicinity import VicinityParams
 from .zones import ZoneMap, carrier_zones
 
@@ -141,11 +142,11 @@ def sonar_cone_zones(zones: ZoneMap, T_M_S: np.ndarray, half_angle: float, lengt
         zones.add_cylinder(f"{name}_{k}", centre, radius, slice_length / 2.0, R)
 
 
-class Track(Skill):
+class Track(Skill["Track.Params"]):
     """Track the UAV with the arm's Motion Engine from the eye-in-hand camera while the UAV holds its pose in M."""
 
     class Params(NodeParams):
-        carrier: str = "carrier"
+        carrier: CarrierName = "carrier"
         """Team member carrying the arm and its eye-in-hand camera (a mobile_manipulator)."""
         standoff: float = Field(0.40, ge=0.2, le=1.2)
         """Camera-to-tag-plate distance (m) of the tracking target P_VS (chosen: the bundle fills the view, all tags found at 320×240)."""
@@ -182,13 +183,14 @@ class Track(Skill):
         f_B: float = Field(4.0, gt=0.0)
         """Planning-and-optimisation rate f_B (Hz), §IV-A; merge and selection run at f_O = 2·f_B."""
 
-    robot_kinds = ("Quadrotor",)
+    robot_kinds = (Rotorcraft,)
+    claims = ("rotors", "{carrier}/arm")
     writes = (f"{{carrier}}/{TRACKING}", f"{{carrier}}/{DOCKING_FLAG}")
 
     @classmethod
-    def read_keys(cls, params: NodeParams, robot: str | None) -> tuple[str, ...]:
+    def read_keys(cls, params: Track.Params, robot: str | None) -> tuple[str, ...]:
         """The contact target, when the skill follows a contact phase."""
-        return (f"{params.carrier}/{CONTACT_TARGET}",) if params.contact else ()  # type: ignore[attr-defined]
+        return (f"{params.carrier}/{CONTACT_TARGET}",) if params.contact else ()
 
     # ------------------------------------------------------------ life cycle
     def start(self) -> None:

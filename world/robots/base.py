@@ -190,6 +190,11 @@ class Robot:
     def post_physics(self, dt: float) -> None:
         """Update internal state after each physics step (batteries, estimates)."""
 
+    @classmethod
+    def declared_sensors(cls) -> frozenset[str] | None:
+        """Short names of the sensors every robot of this kind has (``None``: not declared, not checked)."""
+        return None
+
     def safe_stop(self) -> None:
         """Leave the robot safe: hover in place, stop the wheels, hold the arm."""
         raise NotImplementedError(f"{type(self).__name__} must say how it stops safely")

@@ -56,7 +56,7 @@ from .arm import ArmController
 from .attachment import set_collisions, weld
 from .base import Robot, yaw_of
 from ..estimation.ground import SKID_STEER_ODOMETRY
-from ..onboard import simulates_hardware
+from ..onboard import ManipulatorOnboard, simulates_hardware
 from .diff_drive import DiffDriveLimits
 from .encoders import JointEncoders
 from .wheeled import WheeledRobot
@@ -280,6 +280,7 @@ class MMS(WheeledRobot):
     """
 
     kind = "mms"
+    onboard_class = ManipulatorOnboard
     urdf = "mms.urdf"
     default_limits = MMS_LIMITS
 
@@ -387,6 +388,7 @@ class MMS(WheeledRobot):
         """Close both fingers with :data:`FINGER_FORCE_N` each; they stop on whatever is between them."""
         self._command_fingers(0.0)
 
+    @simulates_hardware
     def gripper_opening(self) -> float:
         """Gap between the finger pads (m)."""
         states = pybullet.getJointStates(self.body_id, self.fingers, physicsClientId=self.cid)

@@ -171,6 +171,11 @@ class MobileManipulator(WheeledRobot):
 
     kind = "mobile_manipulator"
     onboard_class = CarrierOnboard
+
+    @classmethod
+    def declared_sensors(cls) -> frozenset[str] | None:
+        """The eye-in-hand camera, the front RGB-D camera and the LiDAR."""
+        return frozenset(SENSOR_LINKS)
     urdf = "mobile_manipulator.urdf"
     default_limits = MOBILE_MANIPULATOR_LIMITS
     payload_kg = PAYLOAD_KG

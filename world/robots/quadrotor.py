@@ -279,6 +279,12 @@ class Quadrotor(Robot):
     onboard_class = QuadrotorOnboard
     estimator: FlightEstimator
 
+    @classmethod
+    def declared_sensors(cls) -> frozenset[str] | None:
+        """The kind's sensors (its spec's, cameras included); ``None`` on the generic class without a spec."""
+        spec = getattr(cls, "spec", None)
+        return None if spec is None else frozenset(spec.sensors)
+
     def __init__(
         self,
         world: World,
