@@ -214,7 +214,7 @@ def test_robot_kind_and_robot_presence_are_checked(tmp_path):
     assert "cannot run on 'uav' (a bebop2)" in str(err) and err.line == 6
     err = compile_error(tmp_path, "until: {skill: wait}\ncondition: {battery_below: 0.2, robot: ugv}", team=UGV_TEAM)
     assert str(err).endswith("condition 'battery_below' cannot run on 'ugv' (a summit_xl); "
-                             "expected a robot with capability HasBattery (none in this team)")  # no battery: at compile time
+                             "expected a robot with capability HasBattery (none in this team)")  # no battery
     err = compile_error(tmp_path, "until: {skill: wait}\ncondition: {obstacle_ahead: 1.0, robot: ugv}", team=UGV_TEAM)
     assert str(err).endswith("condition 'obstacle_ahead' cannot run on 'ugv' (a summit_xl); "
                              "expected a robot with capability HasBase and HasLidar (none in this team)")  # no LiDAR

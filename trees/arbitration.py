@@ -21,6 +21,7 @@ through the arbiter, for the resources the node claims only.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Collection
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -47,7 +48,7 @@ class UnclaimedResourceError(RuntimeError):
 
 
 class Arbiter:
-    """Stamps commands per robot and resource with the tick and the node, and drops those of finishing nodes that lost it.
+    """Stamps commands per robot and resource with the tick and the node; drops a finishing node's on a resource taken over.
 
     The runner calls :meth:`new_tick` before every tree tick. Ticks count
     from 1; commands sent outside a tick (tick 0) are stamped too.
@@ -63,7 +64,7 @@ class Arbiter:
         return self.tick
 
     def last(self, robot_name: str, resource: str | None = None) -> Stamp | None:
-        """Stamp of the last command ``robot_name``'s ``resource`` received (any resource: the latest); ``None`` if none."""
+        """Stamp of the last command ``robot_name``'s ``resource`` (any: the latest) received; ``None`` if none."""
         stamps = [s for (r, res), s in self._last.items() if r == robot_name and resource in (None, res)]
         return max(stamps, key=lambda s: s.tick, default=None)
 
@@ -96,7 +97,7 @@ class Arbiter:
     def safe_stop(
         self, robot: Onboard, node_id: Any, node_name: str, resources: Collection[str] | None = None
     ) -> Stamp | None:
-        """Leave ``resources`` of ``robot`` (default: all) safe for a stopping node, each unless another node drives it this tick.
+        """Leave ``resources`` of ``robot`` (default: all) safe for a stopping node, each unless taken over this tick.
 
         Returns ``None`` when every safe-stop was applied, else the stamp of
         the first command (issued in this tick by another node) that kept a
@@ -105,7 +106,8 @@ class Arbiter:
         kept: Stamp | None = None
         for resource in sorted(robot.resources() if resources is None else resources):
             _, holder = self.command(
-                robot.name, resource, lambda r=resource: robot.safe_stop(r), node_id, node_name, "safe_stop", yielding=True
+                robot.name, resource, functools.partial(robot.safe_stop, resource), node_id, node_name, "safe_stop",
+                yielding=True,
             )
             kept = kept or holder
         return kept
@@ -163,7 +165,7 @@ class CommandPort:
 
     def __getattr__(self, name: str) -> Any:
         if name.startswith("_"):
-            raise AttributeError(f"{name!r}: private attributes of '{self._onboard.name}' are not part of its interface")
+            raise AttributeError(f"{name!r}: the private attributes of '{self._onboard.name}' are not its interface")
         value = getattr(self._target, name)
         qualified = self._prefix + name
         if not self._prefix and name in self._onboard.devices():
@@ -191,7 +193,7 @@ class CommandPort:
         return result
 
     def safe_stop(self) -> Stamp | None:
-        """Arbitrated safe-stop of the resources of this robot the node claims; the stamp that kept one, else ``None``."""
+        """Arbitrated safe stop of the resources of this robot the node claims; the stamp that kept one, else ``None``."""
         node, robot = self._node, self._onboard.name
         resources = [r for r in sorted(self._onboard.resources()) if node.may_command(robot, r)]
         kept = self._arbiter.safe_stop(self._onboard, node.node_id, node.name, resources)

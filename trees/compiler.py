@@ -34,7 +34,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Annotated, Any
+from typing import Any
 
 import py_trees
 from py_trees.behaviour import Behaviour
@@ -61,17 +61,17 @@ class CompiledTree:
     """
 
     root: Behaviour
-    nodes: list[MissionNode] = field(default_factory=list)
+    nodes: list[MissionNode[Any]] = field(default_factory=list)
     listens: set[str] = field(default_factory=set)
 
     @property
-    def skills(self) -> list[Skill]:
+    def skills(self) -> list[Skill[Any]]:
         """Skill leaves, in tree order."""
         return [n for n in self.nodes if isinstance(n, Skill)]
 
-    def active_skills(self) -> dict[str, list[Skill]]:
+    def active_skills(self) -> dict[str, list[Skill[Any]]]:
         """Running skills by robot name (``""`` for skills without a robot)."""
-        active: dict[str, list[Skill]] = {}
+        active: dict[str, list[Skill[Any]]] = {}
         for skill in self.skills:
             if skill.status == py_trees.common.Status.RUNNING:
                 active.setdefault(skill.robot_name or "", []).append(skill)
@@ -95,7 +95,7 @@ class _Compiler:
         self.spec = mission.spec
         self.context = context
         self.registry = registry
-        self.leaves: list[tuple[MissionNode, Any]] = []  # (node, where it was written)
+        self.leaves: list[tuple[MissionNode[Any], Any]] = []  # (node, where it was written)
         self.names: dict[str, int] = {}
         self.resources = ResourceChecks(mission)
 
@@ -107,7 +107,7 @@ class _Compiler:
         return name if seen == 1 else f"{name} #{seen}"
 
     # ---------------------------------------------------------------- build
-    def build(self, node: NodeBase) -> Behaviour:
+    def build(self, node: Any) -> Behaviour:  # a node model of the mission (its fields by kind)
         kind = node.kind
         if kind in ("skill", "condition"):
             return self.leaf(kind, getattr(node, kind), node.robot, node.params, node, node.name)
@@ -157,7 +157,7 @@ class _Compiler:
         branch.name = self.unique(f"when {branch.describe()}")
         return branch
 
-    def guard(self, guard: Guard) -> Condition:
+    def guard(self, guard: Guard) -> Condition[Any]:
         cls = self.resolve("condition", guard.condition, guard.key_path + (guard.condition,))
         params = dict(guard.params)
         if cls.primary is None:
@@ -176,7 +176,7 @@ class _Compiler:
             params[cls.primary] = guard.argument
         return self.leaf("condition", guard.condition, guard.robot, params, guard, None, cls)  # type: ignore[return-value]
 
-    def resolve(self, kind: str, name: str, where: Any) -> type[MissionNode]:
+    def resolve(self, kind: str, name: str, where: Any) -> type[MissionNode[Any]]:
         try:
             return self.registry.resolve(kind, name)
         except MissionError as err:
@@ -192,8 +192,8 @@ class _Compiler:
         raw_params: dict[str, Any],
         where: Any,
         name: str | None,
-        cls: type[MissionNode] | None = None,
-    ) -> MissionNode:
+        cls: type[MissionNode[Any]] | None = None,
+    ) -> MissionNode[Any]:
         at = where.key_path
         if cls is None:
             cls = self.resolve(kind, type_name, at + (kind,))
@@ -211,20 +211,20 @@ class _Compiler:
         self.leaves.append((node, at))
         return node
 
-    def guard_params_error(self, exc: ValidationError, guard: Guard, cls: type[MissionNode]) -> MissionError:
+    def guard_params_error(self, exc: ValidationError, guard: Guard, cls: type[MissionNode[Any]]) -> MissionError:
         """Errors of a guard's parameters point at the condition key for the primary one."""
         first = exc.errors()[0]
         field_name = first["loc"][0] if first["loc"] else None
-        if field_name == getattr(cls, "primary", None):
+        if isinstance(field_name, str) and field_name == cls.primary:
             info = cls.Params.model_fields[field_name]
             try:  # validate the value alone, so the error points at the condition key
-                TypeAdapter(Annotated[(info.annotation, *info.metadata)]).validate_python(guard.argument)
+                TypeAdapter(info.rebuild_annotation()).validate_python(guard.argument)
             except ValidationError as alone:
                 return self.mission.validation_error(alone, guard.key_path + (guard.condition,), info.annotation)
         return self.mission.validation_error(exc, guard.key_path + ("params",), cls.Params)
 
     def check_members(
-        self, cls: type[MissionNode], params: Any, raw_params: dict[str, Any], robot: str | None, where: Any
+        self, cls: type[MissionNode[Any]], params: Any, raw_params: dict[str, Any], robot: str | None, where: Any
     ) -> None:
         """Parameters naming team members (:class:`~.skill.TeamMember`) name one, with the capability they require."""
         team = self.spec.team
@@ -233,7 +233,7 @@ class _Compiler:
             value = getattr(params, field_name)
             if member is None or value is None:
                 continue
-            if isinstance(where, Guard) and field_name == getattr(cls, "primary", None):
+            if isinstance(where, Guard) and field_name == cls.primary:
                 at = where.key_path + (where.condition,)
             elif field_name in raw_params:
                 at = where.key_path + ("params", field_name)
@@ -254,7 +254,9 @@ class _Compiler:
                     f"({one_of(able) if able else 'none in this team'})",
                 )
 
-    def robot_for(self, cls: type[MissionNode], kind: str, type_name: str, robot: str | None, at: Any) -> str | None:
+    def robot_for(
+        self, cls: type[MissionNode[Any]], kind: str, type_name: str, robot: str | None, at: Any
+    ) -> str | None:
         team = self.spec.team
         if not cls.uses_robot:
             if robot is not None:
@@ -314,7 +316,7 @@ class _Compiler:
 
     def listened_commands(self) -> set[str]:
         said = {n.params.command for n, _ in self.leaves if isinstance(n, OperatorSaid)}
-        return said | {c for n, _ in self.leaves for c in getattr(n, "operator_commands", ())}  # skills that ask
+        return said | {c for n, _ in self.leaves for c in n.operator_commands}  # skills that ask
 
     def check_operator_script(self, listens: set[str]) -> None:
         """Scripted operator commands must be control commands or listened to by the tree."""

@@ -13,7 +13,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any
 
 import py_trees
 from py_trees.behaviour import Behaviour
@@ -30,7 +31,7 @@ class GuardedBranch(py_trees.composites.Sequence):
     that guarded it are handled (un-latched).
     """
 
-    def __init__(self, name: str, guards: Sequence[Condition], do: Behaviour, context: RunContext):
+    def __init__(self, name: str, guards: Sequence[Condition[Any]], do: Behaviour, context: RunContext):
         super().__init__(name, memory=False, children=[*guards, do])
         self.guards = list(guards)
         self.do = do
@@ -51,7 +52,7 @@ class GuardedBranch(py_trees.composites.Sequence):
                     channel.handle(guard.params.command)
 
 
-def running_skills(node: Behaviour) -> list[Skill]:
+def running_skills(node: Behaviour) -> list[Skill[Any]]:
     """Skills of ``node``'s subtree that are RUNNING."""
     return [n for n in node.iterate() if isinstance(n, Skill) and n.status == Status.RUNNING]
 
@@ -69,7 +70,7 @@ class Priorities(py_trees.composites.Selector):
         super().__init__(name, memory=False, children=list(children))
         self.context = context
 
-    def tick(self):  # noqa: ANN201 (a py_trees generator)
+    def tick(self) -> Iterator[Behaviour]:
         before = self.current_child if self.status == Status.RUNNING else None
         running = running_skills(before) if before is not None else []
         for node in super().tick():
@@ -77,7 +78,7 @@ class Priorities(py_trees.composites.Selector):
                 self._record_preemption(before, running)
             yield node
 
-    def _record_preemption(self, before: Behaviour, running: list[Skill]) -> None:
+    def _record_preemption(self, before: Behaviour, running: list[Skill[Any]]) -> None:
         now = self.current_child
         if now is None or now is before or self.status == Status.FAILURE:
             return
@@ -98,7 +99,7 @@ class Priorities(py_trees.composites.Selector):
             )
 
 
-def stop_text(skill: Skill) -> str | None:
+def stop_text(skill: Skill[Any]) -> str | None:
     """How a stopped skill left its robot: ``"safe_stop"``, ``"kept by <node>"``, ``None`` (no robot)."""
     if not skill.uses_robot or skill.robot_name is None:
         return None

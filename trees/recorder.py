@@ -275,7 +275,7 @@ class Recorder:
                 self._write_event(self.t, "run_end", {"outcome": outcome, "sim_time": self.t})
             record = {"outcome": outcome, "sim_time": self.t, **details}
             self._writer.add_metadata("outcome", {str(k): _metadata_text(v) for k, v in record.items()})
-            self._writer.finish()
+            self._writer.finish()  # type: ignore[no-untyped-call]
         finally:
             self._file.close()
             self._closed = True

@@ -87,7 +87,7 @@ class ResourceChecks:
         declared = robot_class(kind).declared_sensors()
         return [] if declared is None else [s for s in sensors if s not in declared]
 
-    def claims_of(self, node: MissionNode, team: Mapping[str, Any]) -> set[tuple[str, str]]:
+    def claims_of(self, node: MissionNode[Any], team: Mapping[str, Any]) -> set[tuple[str, str]]:
         """``(robot, resource)`` pairs a skill leaf commands (a claim on any resource expands to its robot's)."""
         if not isinstance(node, Skill):
             return set()
@@ -99,9 +99,11 @@ class ResourceChecks:
                 pairs.add((robot, resource))
         return pairs
 
-    def check_parallel(self, branches: Sequence[Sequence[tuple[MissionNode, Any]]], team: Mapping[str, Any]) -> None:
+    def check_parallel(
+        self, branches: Sequence[Sequence[tuple[MissionNode[Any], Any]]], team: Mapping[str, Any]
+    ) -> None:
         """No two branches of a ``parallel`` (each its ``(leaf, where)`` list) claim one resource of one robot."""
-        seen: dict[tuple[str, str], tuple[MissionNode, Any, int]] = {}
+        seen: dict[tuple[str, str], tuple[MissionNode[Any], Any, int]] = {}
         for index, leaves in enumerate(branches):
             for node, at in leaves:
                 for claim in sorted(self.claims_of(node, team)):

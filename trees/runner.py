@@ -152,7 +152,7 @@ def build_world(mission: Mission, seed: int, gui: bool = False) -> World:
     return world
 
 
-def _located(mission: Mission, key_path: tuple, err: Exception) -> MissionError:
+def _located(mission: Mission, key_path: tuple[Any, ...], err: Exception) -> MissionError:
     if isinstance(err, UnknownNameError):
         return mission.error_at(key_path, f"unknown {err.kind} '{err.name}'", one_of(err.known), suggest(err.name, err.known))
     return mission.error_at(key_path, str(err))

@@ -221,7 +221,7 @@ def _params_argument(cls: type) -> type[NodeParams] | None:
             if isinstance(arg, (str, ForwardRef)):
                 text = arg if isinstance(arg, str) else arg.__forward_arg__
                 if text != f"{cls.__name__}.Params" or "Params" not in cls.__dict__:
-                    raise TypeError(f"{cls.__name__}: a string parameter class must name its nested class, '{cls.__name__}.Params'")
+                    raise TypeError(f"{cls.__name__}: a parameter class given as a string names '{cls.__name__}.Params'")
                 return cast("type[NodeParams]", cls.__dict__["Params"])
             if isinstance(arg, type):
                 return arg
@@ -250,6 +250,13 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P]):
     claims: ClassVar[tuple[str, ...] | None] = ()
     #: whether the node acts on / observes one team robot
     uses_robot: ClassVar[bool] = True
+    #: a condition's parameter set by the compact guard form (``Condition.primary``); ``None`` for skills
+    primary: ClassVar[str | None] = None
+
+    @property
+    def operator_commands(self) -> tuple[str, ...]:
+        """Operator commands this node consumes (the compiler accepts them in a mission's operator script)."""
+        return ()
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -347,7 +354,7 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P]):
         return self._port
 
     def member(self, name: str) -> CommandPort:
-        """Team member ``name``'s onboard interface as this node commands it (its claimed resources, through the arbiter)."""
+        """Team member ``name``'s onboard interface as this node commands it (claimed resources, via the arbiter)."""
         return CommandPort(self.context.onboard(name), self.context.arbiter, self._claimant)
 
     @property
@@ -386,7 +393,7 @@ class Skill(MissionNode[P]):
 
     @property
     def stopped_by(self) -> Stamp | None:
-        """The stamp of another node's command that kept one of this skill's resources when it finished, else ``None``."""
+        """The stamp of another node's command that kept one of its resources when it finished, else ``None``."""
         return self._claimant.kept
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
@@ -446,7 +453,6 @@ class Condition(MissionNode[P]):
     form (``{battery_below: 0.2, robot: uav}`` sets ``threshold``).
     """
 
-    primary: ClassVar[str | None] = None
     btcpp_kind: ClassVar[str] = "Condition"  # BehaviorTree.CPP export (trees/btxml.py)
 
     def check(self) -> bool:

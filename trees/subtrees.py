@@ -51,7 +51,7 @@ class Resolved:
     """
 
     data: Any
-    notes: dict[tuple, str] = field(default_factory=dict)
+    notes: dict[tuple[Any, ...], str] = field(default_factory=dict)
     unknown: list[MissionError] = field(default_factory=list)
 
 
@@ -72,7 +72,7 @@ def resolve_references(
     """
     result = Resolved(None)
 
-    def resolve(value: Any, path: tuple) -> Any:
+    def resolve(value: Any, path: tuple[Any, ...]) -> Any:
         if isinstance(value, dict):
             return {k: resolve(v, path + (k,)) for k, v in value.items()}
         if isinstance(value, list):

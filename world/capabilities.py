@@ -122,7 +122,7 @@ class HasArm(Protocol):
 
 @runtime_checkable
 class Carrier(HasArm, HasBase, Protocol):
-    """A carrier with a docking device on its arm (resources ``base``, ``arm``, ``docking``): Narváez's mobile manipulator."""
+    """A carrier with a docking device on its arm (resources ``base``, ``arm``, ``docking``): the mobile manipulator."""
 
     @property
     def docking(self) -> DockingPort:
@@ -165,7 +165,9 @@ class HasLift(Protocol):
 
 
 #: every capability, by name (``marsupial skills`` and error messages name them so)
-CAPABILITIES: tuple[type, ...] = (HasBattery, HasBase, HasLidar, HasPlatform, Rotorcraft, HasArm, Carrier, HasGripper, HasLift)
+CAPABILITIES: tuple[type, ...] = (
+    HasBattery, HasBase, HasLidar, HasPlatform, Rotorcraft, HasArm, Carrier, HasGripper, HasLift,
+)
 
 
 def members(capability: type) -> frozenset[str]:

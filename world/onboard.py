@@ -201,7 +201,7 @@ class Onboard:
     #: resource -> the command method that leaves it safe
     safe_stops: ClassVar[Mapping[str, str]] = {}
 
-    __slots__ = ("name", "kind", "_Onboard__robot", "_Onboard__ports")
+    __slots__ = ("name", "kind", "__robot", "__ports")  # private slots, name-mangled to _Onboard__…
 
     def __init__(self, robot: Robot):
         self.name = robot.name
@@ -250,7 +250,7 @@ class Onboard:
 
     # ------------------------------------------------------------ commands
     def safe_stop(self, resource: str | None = None) -> None:
-        """Leave ``resource`` safe (every resource when ``None``): its safe-stop command (hover, stop the wheels, hold the arm)."""
+        """Leave ``resource`` safe (all when ``None``) by its safe-stop command: hover, stop the wheels, hold the arm."""
         for name in sorted(self.resources()) if resource is None else (resource,):
             method = self.safe_stops.get(name)
             if method is not None:
@@ -386,7 +386,7 @@ class DockingPort:
     :attr:`charging` (the charger's current sense).
     """
 
-    __slots__ = ("_DockingPort__device",)
+    __slots__ = ("__device",)
 
     def __init__(self, device: Any):
         self.__device = device
@@ -469,11 +469,11 @@ class CarrierOnboard(WheeledOnboard):
 
     def joint_positions(self) -> np.ndarray:
         """Arm joint angles (rad) from the joint encoders."""
-        return self._robot.arm_encoders()  # type: ignore[attr-defined, no-any-return]
+        return self._robot.arm_encoders()  # type: ignore[attr-defined]
 
     def joint_targets(self) -> np.ndarray:
         """Arm joint targets being tracked (rad)."""
-        return self._robot.joint_targets()  # type: ignore[attr-defined, no-any-return]
+        return self._robot.joint_targets()  # type: ignore[attr-defined]
 
     def arm_at_target(self, tolerance: float = 0.01) -> bool:
         """True when every encoder reads within ``tolerance`` rad of its target."""
@@ -487,7 +487,7 @@ class CarrierOnboard(WheeledOnboard):
     @property
     def joint_limits(self) -> tuple[np.ndarray, np.ndarray]:
         """Lower and upper joint limits (rad)."""
-        return self._robot.joint_limits  # type: ignore[attr-defined, no-any-return]
+        return self._robot.joint_limits  # type: ignore[attr-defined]
 
     @property
     def arm_kinematics(self) -> Any:
@@ -496,7 +496,7 @@ class CarrierOnboard(WheeledOnboard):
 
     def arm_pose(self, name: str) -> np.ndarray:
         """Joint angles (rad) of a named arm pose."""
-        return self._robot.arm_pose(name)  # type: ignore[attr-defined, no-any-return]
+        return self._robot.arm_pose(name)  # type: ignore[attr-defined]
 
     def arm_mount(self) -> tuple[np.ndarray, np.ndarray]:
         """Frame M (``arm_base``) in the ``base_footprint`` frame the estimate is of: position (m), rotation (URDF)."""
@@ -532,7 +532,7 @@ class ManipulatorOnboard(WheeledOnboard):
 
     def joint_positions(self) -> np.ndarray:
         """Arm joint angles (rad) from the joint encoders."""
-        return self._robot.arm_encoders()  # type: ignore[attr-defined, no-any-return]
+        return self._robot.arm_encoders()  # type: ignore[attr-defined]
 
     def open_gripper(self) -> None:
         """Open the fingers."""
@@ -550,7 +550,9 @@ class ManipulatorOnboard(WheeledOnboard):
 class LiftOnboard(WheeledOnboard):
     """A wheeled base with a lifting docking station (the ``mother_ugv``): raise, lower, platform height."""
 
-    commands: ClassVar[Mapping[str, str]] = {**WheeledOnboard.commands, "raise_platform": "lift", "lower_platform": "lift"}
+    commands: ClassVar[Mapping[str, str]] = {
+        **WheeledOnboard.commands, "raise_platform": "lift", "lower_platform": "lift",
+    }
     safe_stops: ClassVar[Mapping[str, str]] = {"base": "stop", "lift": "_hold_lift"}
     __slots__ = ()
 
@@ -573,11 +575,10 @@ class LiftOnboard(WheeledOnboard):
 
 def onboard_of(robot: Robot) -> Onboard:
     """The onboard interface of ``robot`` (its class's ``onboard_class``), built once and kept on the robot."""
-    port = getattr(robot, "_onboard", None)
+    port = robot._onboard
     if port is None:
-        port = robot.onboard_class(robot)
-        robot._onboard = port
-    return port  # type: ignore[no-any-return]
+        port = robot._onboard = robot.onboard_class(robot)
+    return port
 
 
 def base_frame_offset(p_base: np.ndarray, q_base: np.ndarray, p_link: np.ndarray, q_link: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -34,7 +34,7 @@ speeds m/s, times simulated s.
 
 from __future__ import annotations
 
-from typing import Annotated, ClassVar, Literal, TypeVar
+from typing import Annotated, ClassVar, Literal, TypeVar, get_args
 
 import numpy as np
 from py_trees.common import Status
@@ -46,7 +46,9 @@ from marsupial.world.capabilities import HasBase, HasPlatform, Rotorcraft
 from .touchdown import TouchdownParams, TouchdownTest
 from .tracking import GAIN_SCHEDULES, TrackerConfig, TrackingModule, tracking_module
 
-GainSchedule = Literal[tuple(GAIN_SCHEDULES)]  # type: ignore[valid-type]
+GainSchedule = Literal["table1", "manual_fit"]  # the names of GAIN_SCHEDULES
+if set(get_args(GainSchedule)) != set(GAIN_SCHEDULES):
+    raise ImportError(f"GainSchedule {get_args(GainSchedule)} must name the gain schedules {sorted(GAIN_SCHEDULES)}")
 PAPER_PATH_TIME_S = 0.1  # path time of the prediction, §3.3.2
 
 
@@ -288,6 +290,7 @@ class Relocalize(FlightSkill["Relocalize.Params"]):
         module.relocalizations += 1
         self.context.metric("relocalizations", module.relocalizations, robot=self.robot_name)
         module.set_state("relocalizing", self, module.pending_relocalization or "")
+        assert module.tracker is not None, "configured by FlightSkill.start"
         module.tracker.pi.reset()  # the authors reset the PI on re-localisation; the filter keeps the platform's motion
         self._located_at_start = module.located
 

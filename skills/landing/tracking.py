@@ -58,7 +58,7 @@ import math
 from bisect import bisect_left
 from collections import deque
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Generic, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, TypeVar, cast
 
 import cv2
 import numpy as np
@@ -368,7 +368,7 @@ class TrackingModule:
         if self.tracker is not None:
             self.tracker.observe(stamp, p_nav)
         self.offset = heading_rotation(pose.yaw) @ (p_nav[:2] - pose.uav_position[:2])
-        self.offset_at, self.offset_height = self.now, self._heights.nearest(stamp)
+        self.offset_at, self.offset_height = self.now, cast(float, self._heights.nearest(stamp))  # camera_pose had one
         self.platform_yaw = self._heading_of(detection.polygon, frame.K, pose.rotation)
         self.last_seen = self.now
         self.located += 1

@@ -177,7 +177,7 @@ class Contact(Skill["Contact.Params"]):
     def await_authorization(self) -> Status:
         command = self.params.authorization
         channel = self.context.operator
-        said = None if channel is None else channel.handle(command)
+        said = None if channel is None or command is None else channel.handle(command)
         if said is None:
             return Status.RUNNING
         self.phase = "settling"
@@ -192,7 +192,7 @@ class Contact(Skill["Contact.Params"]):
             state is not None and state.seen and state.p_B_A is not None
             and state.hold_error <= p.settle_error and state.camera_offset <= p.settle_error
         )
-        if not settled:
+        if not settled or state is None or state.p_B_A is None:  # (the last two: for the type checker)
             self.settled_since = None
             self.feedback_message = "authorized: waiting for stable tracking under the UAV"
             return Status.RUNNING
@@ -223,7 +223,7 @@ class Contact(Skill["Contact.Params"]):
             return self.cancel("no estimate of Part B")
         if not state.seen and state.age() > (p.blind_timeout if gap <= p.blind_range else p.lost_timeout):
             return self.cancel(f"marker lost {gap:.2f} m from Part B ({state.age():.1f} s unseen)")
-        if now - self.t0 > p.timeout:
+        if self.t0 is not None and now - self.t0 > p.timeout:  # t0: set when the approach began
             return self.cancel(f"no lock after {p.timeout:.0f} s of approach")
         lateral = math.hypot(float(p_B_A[0]), float(p_B_A[1]))
         aligned = lateral <= p.align_tolerance

@@ -40,6 +40,7 @@ from marsupial.world.onboard import StateEstimate
 
 from .observer import EyeInHandObserver
 from .relative_pose import RelativePose, RelativeState
+from .selection import yaw_of_rotation
 from .team import CarrierName, carrier_port
 
 PART_A_LINK = "part_a"
@@ -164,7 +165,7 @@ def command_hold(uav: Any, state: RelativeState, p_target_M: np.ndarray, yaw_tar
     if state.T_M_Q is None:
         uav.hover()
         return None
-    p_uav_M, yaw_uav_M = state.T_M_Q[:3, 3], state.yaw_M
+    p_uav_M, yaw_uav_M = state.T_M_Q[:3, 3], yaw_of_rotation(state.T_M_Q[:3, :3])
     v_M, yaw_rate = hold_command(p_uav_M, yaw_uav_M, p_target_M, yaw_target_M, frame, gains)
     v_M = v_M - state.drift_M  # the autopilot flies its velocity estimate, biased by the drift rate
     uav.command_velocity(*body_velocity(v_M, yaw_uav_M), yaw_rate, frame="body")
@@ -181,7 +182,8 @@ def relative_pose_of(
     ``vision_fixes``: also send each accepted frame to the UAV's estimator as an external fix.
     """
     observer = EyeInHandObserver.of(skill.context, carrier) if fuse else None
-    return RelativePose(carrier, skill.context.link(carrier.name), skill.robot_name, observer, gain, gate, since, vision_fixes)
+    uav = str(skill.robot_name)  # a UAV skill always has its robot
+    return RelativePose(carrier, skill.context.link(carrier.name), uav, observer, gain, gate, since, vision_fixes)
 
 
 class RelativeHold(Skill["RelativeHold.Params"]):

@@ -125,7 +125,7 @@ class Rendezvous(Skill["Rendezvous.Params"]):
         observation = self.observer.observe(self.now)
         if observation is not None and observation.stamp != self.last_stamp:
             self.last_stamp = observation.stamp
-            if observation.seen:
+            if observation.pose is not None:  # the bundle was measured (observation.seen)
                 self.write(f"{self.params.carrier}/{UAV_POSE}", observation)
                 if not self.seen:
                     phase_event(self, "marker_seen", tags=list(observation.pose.ids))
@@ -135,6 +135,7 @@ class Rendezvous(Skill["Rendezvous.Params"]):
         self.command_arm()
         recent = self.seen[-self.params.stable_detections :]
         stable = len(recent) >= self.params.stable_detections and position_spread(recent) <= self.params.stable_spread
+        assert state.yaw_M is not None, "command_hold had a pose"
         heading_error = abs(math.remainder(state.yaw_M - self.params.yaw_M, math.tau))
         arrived = distance <= self.params.arrival_tolerance and heading_error <= 0.15
         if stable and arrived:
@@ -158,6 +159,7 @@ class Rendezvous(Skill["Rendezvous.Params"]):
         self.q_hold = None
         q = self.q_ready.copy()
         p = self.params
+        assert self.search_started is not None, "the search began"
         t = self.now - self.search_started
         q[list(SEARCH_JOINTS)] += search_offsets(t, p.search_yaw, p.search_tilt, p.search_period)
         self.carrier.set_joint_targets(q)

@@ -37,7 +37,7 @@ from marsupial.world.capabilities import Carrier, Rotorcraft
 
 from .pose import invert
 from .relative_hold import PART_A_LINK, CarrierFrame, HoldGains, command_hold, part_b_transform, relative_pose_of
-from .relative_pose import RelativeState
+from .relative_pose import RelativePose, RelativeState
 from .selection import yaw_of_rotation
 from .team import DOCKING_FLAG, UAV_STORED, CarrierName, carrier_port, phase_event
 
@@ -116,7 +116,7 @@ class Deploy(Skill["Deploy.Params"]):
         self.yaw_clear_M = 0.0
         self.gains = HoldGains(max_speed=self.params.climb_speed)
         self.T_A_Q = invert(part_b_transform(self.robot))  # the UAV on Part A: Part B's face on Part A's (§IV-C)
-        self.relative = None
+        self.relative: RelativePose | None = None  # from the hand-over on
         self.write(f"{self.params.carrier}/{DOCKING_FLAG}", True)
         phase_event(self, "raise")
 
@@ -169,6 +169,7 @@ class Deploy(Skill["Deploy.Params"]):
 
     def climb(self) -> Status:
         """Climb to the clearance height above the release point, moving with the carrier (on the estimates)."""
+        assert self.relative is not None, "climb() follows the hand-over"
         state = self.relative.update(self.now)
         if state.T_M_Q is None:  # no telemetry since the hand-over yet: the UAV is where it was released
             state = RelativeState(self.now, self.T_M_Q_release)

@@ -30,7 +30,7 @@ from marsupial.world.capabilities import Carrier
 from marsupial.world.errors import UnknownNameError
 
 if TYPE_CHECKING:
-    from marsupial.trees.skill import Skill
+    from marsupial.trees.skill import MissionNode
 
 #: a parameter naming the carrier a skill works with (checked by the compiler: a team member that is a Carrier)
 CarrierName = Annotated[str, TeamMember(Carrier)]
@@ -40,7 +40,7 @@ UAV_POSE = "uav_pose_M"
 UAV_STORED = "uav_stored"
 
 
-def carrier_port(skill: Skill, name: str) -> CommandPort:
+def carrier_port(skill: MissionNode[Any], name: str) -> CommandPort:
     """The onboard interface of team member ``name`` as ``skill`` commands it (through the run's arbiter).
 
     It must be a :class:`~marsupial.world.capabilities.Carrier`: an arm with
@@ -54,6 +54,6 @@ def carrier_port(skill: Skill, name: str) -> CommandPort:
     return skill.member(name)
 
 
-def phase_event(skill: Skill, phase: str, **fields: Any) -> None:
+def phase_event(skill: MissionNode[Any], phase: str, **fields: Any) -> None:
     """Record that ``skill`` entered ``phase`` (a ``state_change`` event with the node, skill, robot and ``fields``)."""
     skill.context.event("state_change", node=skill.name, skill=skill.kind, robot=skill.robot_name, phase=phase, **fields)
