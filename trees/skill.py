@@ -158,7 +158,10 @@ class RunContext:
         return tuple(self.__world.robots) if self.__world is not None else ()
 
     def onboard(self, name: str) -> Onboard:
-        """The onboard interface of team member ``name`` (:mod:`marsupial.world.onboard`); the error lists the team."""
+        """The onboard interface of team member ``name`` (:mod:`marsupial.world.onboard`); the error lists the team.
+
+        Nodes command and read it through their ports (:meth:`MissionNode.member`), which arbitrate its commands.
+        """
         from marsupial.world.onboard import onboard_of
 
         return onboard_of(self._require_world(f"robot '{name}'").robot(name))

@@ -238,6 +238,10 @@ class Onboard:
         """Position (m) and rotation of ``link`` in the base frame, from the robot's URDF (rigid links)."""
         return self.__robot.link_offset(link)
 
+    def provides(self, capability: type) -> bool:
+        """Whether this robot has ``capability`` (a protocol of :mod:`marsupial.world.capabilities`)."""
+        return isinstance(self, capability)
+
     @classmethod
     def resources(cls) -> frozenset[str]:
         """The resources this kind of robot has (those its commands drive)."""

@@ -64,8 +64,8 @@ import cv2
 import numpy as np
 
 from marsupial.geometry import heading_rotation, rotation_matrix, yaw_of
+from marsupial.world.capabilities import HasPlatform
 from marsupial.world.errors import UnknownNameError
-from marsupial.world.onboard import PlatformOnboard
 
 from .control import PIGains, PlatformTracker
 from .detection import DetectionParams, detect_platform, tilt_of
@@ -466,11 +466,11 @@ class TrackingModule:
 def platform_size(node: MissionNode, name: str | None) -> tuple[float, float]:
     """Size (m) of the landing platform: that of team member ``name``, or of the team's only member with one.
 
-    A static prior (the platform robot's model, ``PlatformOnboard.platform_size``).
+    A static prior (the platform robot's model, ``HasPlatform.platform_size``).
     Raises ``UnknownNameError`` / ``ValueError`` naming the candidates.
     """
     context = node.context
-    carriers = {n: ob for n in context.team() if isinstance(ob := context.onboard(n), PlatformOnboard)}
+    carriers = {n: port for n in context.team() if (port := node.member(n)).provides(HasPlatform)}
     if name is not None:
         if name not in carriers:
             raise UnknownNameError("robot with a landing platform", name, carriers)

@@ -48,7 +48,7 @@ def carrier_port(skill: MissionNode[Any], name: str) -> CommandPort:
     team's carriers when ``name`` is not one of them.
     """
     context = skill.context
-    carriers = [n for n in context.team() if isinstance(context.onboard(n), Carrier)]
+    carriers = [n for n in context.team() if skill.member(n).provides(Carrier)]
     if name not in carriers:
         raise UnknownNameError(f"carrier of {skill.name} (a mobile_manipulator)", name, carriers)
     return skill.member(name)
