@@ -23,6 +23,7 @@ class StubRobot:
 
     name = "r"
     commands = {"drive": "base"}
+    _onboard = None  # (onboard_of keeps the interface there)
 
     @staticmethod
     def onboard_class(robot):
