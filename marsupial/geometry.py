@@ -8,11 +8,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import TypeAlias, Union
 
 import numpy as np
 
+#: a vector argument: a sequence of floats or a numpy array (m, rad, as the parameter says)
+Vector: TypeAlias = Union[Sequence[float], np.ndarray]
 
-def rotation_matrix(quaternion: Sequence[float]) -> np.ndarray:
+
+def rotation_matrix(quaternion: Vector) -> np.ndarray:
     """3×3 rotation matrix of an ``[x, y, z, w]`` quaternion (normalised first)."""
     x, y, z, w = (float(v) for v in quaternion)
     n = math.sqrt(x * x + y * y + z * z + w * w) or 1.0
@@ -46,7 +50,7 @@ def quaternion_from_matrix(R: np.ndarray) -> np.ndarray:
     return -out if out[3] < 0 else out
 
 
-def yaw_of(quaternion: Sequence[float]) -> float:
+def yaw_of(quaternion: Vector) -> float:
     """Heading (rad) about the reference z axis of an ``[x, y, z, w]`` quaternion."""
     x, y, z, w = quaternion
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
@@ -70,7 +74,7 @@ def heading_rotation(yaw: float) -> np.ndarray:
     return np.array([[c, s], [-s, c]])
 
 
-def transform(position: Sequence[float], R: np.ndarray) -> np.ndarray:
+def transform(position: Vector, R: np.ndarray) -> np.ndarray:
     """4×4 homogeneous transform of a position (m) and a 3×3 rotation."""
     T = np.eye(4)
     T[:3, :3] = R

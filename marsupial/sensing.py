@@ -22,6 +22,8 @@ from typing import Any
 
 import numpy as np
 
+from marsupial.world.capabilities import HasBase
+
 
 def sensor_mount(
     robot: Any, link: str, offset: Sequence[float] = (0.0, 0.0, 0.0), R_link_sensor: np.ndarray | None = None
@@ -37,7 +39,7 @@ def sensor_mount(
     R_ls = np.eye(3) if R_link_sensor is None else np.asarray(R_link_sensor, dtype=float)
     p = p_link + R_link @ np.asarray(offset, dtype=float)
     R = R_link @ R_ls
-    if hasattr(robot, "footprint_pose"):  # a wheeled robot: its estimate is of base_footprint
+    if robot.provides(HasBase):  # a wheeled robot: its estimate is of base_footprint
         p_fp, R_fp = robot.link_offset("base_footprint")
         p, R = R_fp.T @ (p - p_fp), R_fp.T @ R
     return p, R

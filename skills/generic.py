@@ -22,13 +22,14 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.trees.skill import NodeParams, Skill
+from marsupial.world.capabilities import HasBase, Rotorcraft
 
-#: robot classes the skills below accept (any kind whose class derives from them)
-AERIAL = ("Quadrotor",)
-GROUND = ("WheeledRobot",)
+#: capabilities of the robots the skills below accept
+AERIAL: tuple[type, ...] = (Rotorcraft,)
+GROUND: tuple[type, ...] = (HasBase,)
 
 
-class Wait(Skill):
+class Wait(Skill["Wait.Params"]):
     """Do nothing for a number of simulated seconds, then succeed."""
 
     class Params(NodeParams):
@@ -46,7 +47,7 @@ class Wait(Skill):
         return Status.SUCCESS if left <= 1e-9 else Status.RUNNING
 
 
-class Goto(Skill):
+class Goto(Skill["Goto.Params"]):
     """Fly a UAV to a point of its navigation frame (proportional velocity command on its estimate, speed-limited)."""
 
     class Params(NodeParams):
@@ -62,6 +63,7 @@ class Goto(Skill):
         """What the UAV does on arrival: hover there, or switch the motors off (to land near the floor)."""
 
     robot_kinds = AERIAL
+    claims = ("rotors",)
 
     def start(self) -> None:
         self.robot.set_motors(True)
@@ -86,7 +88,7 @@ class Goto(Skill):
             self.leave_safe()
 
 
-class Hover(Skill):
+class Hover(Skill["Hover.Params"]):
     """Hold a UAV in place for a number of simulated seconds, then succeed."""
 
     class Params(NodeParams):
@@ -94,6 +96,7 @@ class Hover(Skill):
         """How long to hover (simulated s)."""
 
     robot_kinds = AERIAL
+    claims = ("rotors",)
 
     def start(self) -> None:
         self._until = self.now + self.params.seconds
@@ -105,7 +108,7 @@ class Hover(Skill):
         return Status.SUCCESS if left <= 1e-9 else Status.RUNNING
 
 
-class DriveTo(Skill):
+class DriveTo(Skill["DriveTo.Params"]):
     """Drive a ground robot to a point of the floor (turn towards it, then drive; unicycle law on its estimate)."""
 
     class Params(NodeParams):
@@ -121,6 +124,7 @@ class DriveTo(Skill):
         """Proportional gain from heading error to turn rate (1/s)."""
 
     robot_kinds = GROUND
+    claims = ("base",)
 
     def step(self) -> Status:
         estimate = self.robot.estimate()

@@ -55,6 +55,7 @@ from pydantic import Field
 
 from marsupial.sensing import body_pose, in_nav_frame, scan_in_body, sensor_mount
 from marsupial.trees.skill import NodeParams, Skill
+from marsupial.world.capabilities import HasBase, HasLidar
 
 MAX_SPEED = 2.0  # m/s, UGV longitudinal speed limit, Narváez §V-B-1
 DOCKING_SPEED = 0.5  # m/s, UGV speed limit during docking, Narváez §V-B-1
@@ -360,7 +361,7 @@ def pure_pursuit(
 
 
 # -------------------------------------------------------------------- skill
-class Navigate(Skill):
+class Navigate(Skill["Navigate.Params"]):
     """Drive a ground robot along a guide path or operator set-points, avoiding obstacles seen by its LiDAR."""
 
     class Params(NodeParams):
@@ -389,13 +390,14 @@ class Navigate(Skill):
         stuck_timeout: float | None = Field(30.0, gt=0.0)
         """Fail when the progress along the path has not grown by 0.1 m for this long (s); none: never."""
 
-    robot_kinds = ("MobileManipulator",)  # the wheeled robots with a planar LiDAR
+    robot_kinds = (HasBase, HasLidar)  # the wheeled robots with a planar LiDAR
+    claims = ("base",)  # the base only: a carrier's arm belongs to the docking skills
     writes = ("{robot}/path_progress",)
 
     @classmethod
-    def read_keys(cls, params: NodeParams, robot: str | None) -> tuple[str, ...]:
+    def read_keys(cls, params: Navigate.Params, robot: str | None) -> tuple[str, ...]:
         """The optional docking flag and set-point keys, when given."""
-        keys = (params.docking_flag, params.setpoints_key)  # type: ignore[attr-defined]
+        keys = (params.docking_flag, params.setpoints_key)
         return tuple(k.format(robot=robot) for k in keys if k is not None)
 
     def start(self) -> None:

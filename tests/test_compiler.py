@@ -217,14 +217,15 @@ def test_robot_kind_and_robot_presence_are_checked(tmp_path):
     assert "cannot run on 'uav' (a bebop2)" in str(err) and err.line == 6
     err = compile_error(tmp_path, "until: {skill: wait}\ncondition: {battery_below: 0.2, robot: ugv}", team=UGV_TEAM)
     assert str(err).endswith("condition 'battery_below' cannot run on 'ugv' (a summit_xl); "
-                             "expected a robot whose kind or class is Quadrotor")  # no battery: at compile time
+                             "expected a robot with capability HasBattery (none in this team)")  # no battery
     err = compile_error(tmp_path, "until: {skill: wait}\ncondition: {obstacle_ahead: 1.0, robot: ugv}", team=UGV_TEAM)
     assert str(err).endswith("condition 'obstacle_ahead' cannot run on 'ugv' (a summit_xl); "
-                             "expected a robot whose kind or class is MobileManipulator")  # no LiDAR
+                             "expected a robot with capability HasBase and HasLidar (none in this team)")  # no LiDAR
     err = compile_error(tmp_path, "skill: navigate\nrobot: ugv", team=UGV_TEAM)
     assert "cannot run on 'ugv' (a summit_xl)" in str(err)  # navigate avoids obstacles with a LiDAR
     err = compile_error(tmp_path, "skill: explore\nrobot: uav", team="team:\n  uav: {robot: ardrone2}\n")
-    assert str(err).endswith("expected a robot whose kind or class is one of Bebop2, Tello")  # no front camera
+    assert str(err).endswith("skill 'explore' reads sensor 'front_camera', which 'uav' (a ardrone2) does not have; "
+                             "expected a robot with the sensors front_camera")  # no front camera
     err = compile_error(tmp_path, "skill: wait\nrobot: uav")
     assert "takes no robot" in str(err)
     two = "team:\n  a: {robot: bebop2}\n  b: {robot: tello}\n"

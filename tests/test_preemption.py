@@ -19,10 +19,11 @@ from marsupial.world import World
 
 # ---------------------------------------------------------------- arbitration
 class StubRobot:
-    """Records the commands it receives; it is its own onboard interface."""
+    """Records the commands it receives; it is its own onboard interface (one resource, its base)."""
 
     name = "r"
-    commands = frozenset({"drive", "safe_stop"})
+    commands = {"drive": "base"}
+    _onboard = None  # (onboard_of keeps the interface there)
 
     @staticmethod
     def onboard_class(robot):
@@ -31,10 +32,16 @@ class StubRobot:
     def __init__(self):
         self.received = []
 
+    def resources(self):
+        return frozenset({"base"})
+
+    def devices(self):
+        return frozenset()
+
     def drive(self, v, omega):
         self.received.append(("drive", v))
 
-    def safe_stop(self):
+    def safe_stop(self, resource=None):
         self.received.append(("safe_stop",))
 
 
@@ -116,11 +123,11 @@ def test_safe_stop_applies_when_the_preempting_branch_leaves_the_robot_alone(stu
 def test_a_safe_stop_in_a_later_tick_is_applied(stub_world):
     arbiter, robot = Arbiter(), stub_world.robots["r"]
     arbiter.new_tick()
-    arbiter.command(robot, "a", "a", "drive", 1.0, 0.0)
+    arbiter.command("r", "base", lambda: robot.drive(1.0, 0.0), "a", "a", "drive")
     assert arbiter.safe_stop(robot, "b", "b").node_name == "a"  # same tick, other node: dropped
     assert arbiter.safe_stop(robot, "a", "a") is None  # the commanding node itself may stop it
     arbiter.new_tick()
-    arbiter.command(robot, "a", "a", "drive", 1.0, 0.0)
+    arbiter.command("r", "base", lambda: robot.drive(1.0, 0.0), "a", "a", "drive")
     arbiter.new_tick()
     assert arbiter.safe_stop(robot, "b", "b") is None
     assert robot.received == [("drive", 1.0), ("safe_stop",), ("drive", 1.0), ("safe_stop",)]

@@ -140,7 +140,7 @@ def test_the_trap_catches_a_truth_read_from_a_skill() -> None:
         """Reads the body's true pose through the interface's private slot (what the trap must catch)."""
 
         def step(self):
-            self.robot.robot._Onboard__robot.pose()
+            self.robot._onboard._Onboard__robot.pose()
             return py_trees.common.Status.SUCCESS
 
     with World(seed=1) as world, truth_trap() as trap:

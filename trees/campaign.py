@@ -170,7 +170,7 @@ def plan_trials(
     combos = [dict(zip(keys, values)) for values in itertools.product(*(list((vary or {})[k]) for k in keys))]
     for combo in combos:
         compile_mission(load_mission(mission, {**overrides, **combo}))
-    plan = []
+    plan: list[Trial] = []
     for combo in combos:
         for i in range(trials):
             plan.append(

@@ -196,7 +196,8 @@ def tree(mission: str, fmt: str, output: str | None, sets: tuple[str, ...]) -> N
             text = py_trees.display.ascii_tree(root)
         else:
             graph = py_trees.display.dot_tree(root)
-            text = graph.to_string() if fmt == "dot" else graph.create_svg().decode()
+            # pydot adds its create_<format> methods at run time
+            text = graph.to_string() if fmt == "dot" else graph.create_svg().decode()  # type: ignore[attr-defined]
     _write_text(text, output)
 
 
@@ -241,7 +242,8 @@ def skills(names: tuple[str, ...]) -> None:
             except MissionError as err:
                 console.print(Text.assemble(f"{kind} {name} ({provider}): ", (str(err), "red")))
                 continue
-            kinds = "no robot" if not cls.uses_robot else ", ".join(cls.robot_kinds or ("any robot",))
+            needs = ", ".join(c.__name__ for c in cls.robot_kinds or ())
+            kinds = "no robot" if not cls.uses_robot else needs or "any robot"
             primary = f" Primary: {cls.primary}." if getattr(cls, "primary", None) else ""
             table.caption = Text(f"{cls.summary()} Robots: {kinds}.{primary}")
             table.caption_justify = "left"

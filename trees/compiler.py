@@ -26,15 +26,17 @@ condition      the registered :class:`~.skill.Condition` class
 Checked here, each error at the node's file:line (:meth:`Mission.error_at`):
 unknown skill/condition names (with the closest name), ambiguous providers,
 parameter types and values (each skill's pydantic ``Params``), the robot a
-node needs and its kind, blackboard keys read but written by no node, and
-scripted operator commands nobody listens to.
+node needs and its capabilities and sensors, team members named by
+parameters (:class:`~.skill.TeamMember`) and their capabilities, two parallel
+branches claiming one resource of one robot, blackboard keys read but
+written by no node, and scripted operator commands nobody listens to.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Annotated, Any
+from typing import Any
 
 import py_trees
 from py_trees.behaviour import Behaviour
@@ -49,6 +51,7 @@ from .errors import MissionError, one_of, suggest
 from .mission import Guard, Mission, NodeBase
 from .operator import CONTROL_COMMANDS
 from .registry import Registry
+from .resources import ResourceChecks, kind_capabilities, members_with, team_member_of
 from .skill import Condition, MissionNode, RunContext, Skill
 from .waiting import WAITING_KINDS, build_waiting
 
@@ -61,17 +64,17 @@ class CompiledTree:
     """
 
     root: Behaviour
-    nodes: list[MissionNode] = field(default_factory=list)
+    nodes: list[MissionNode[Any]] = field(default_factory=list)
     listens: set[str] = field(default_factory=set)
 
     @property
-    def skills(self) -> list[Skill]:
+    def skills(self) -> list[Skill[Any]]:
         """Skill leaves, in tree order."""
         return [n for n in self.nodes if isinstance(n, Skill)]
 
-    def active_skills(self) -> dict[str, list[Skill]]:
+    def active_skills(self) -> dict[str, list[Skill[Any]]]:
         """Running skills by robot name (``""`` for skills without a robot)."""
-        active: dict[str, list[Skill]] = {}
+        active: dict[str, list[Skill[Any]]] = {}
         for skill in self.skills:
             if skill.status == py_trees.common.Status.RUNNING:
                 active.setdefault(skill.robot_name or "", []).append(skill)
@@ -82,13 +85,9 @@ class CompiledTree:
         return sum(1 for _ in self.root.iterate())
 
 
-def robot_kind_matches(kind: str, accepted: tuple[str, ...] | None) -> bool:
-    """Whether robot ``kind`` is among ``accepted`` kind names or robot class names (its class or a base)."""
-    if accepted is None or kind in accepted:
-        return True
-    from marsupial.world.robots import robot_class
-
-    return any(cls.__name__ in accepted for cls in robot_class(kind).__mro__)
+def robot_kind_matches(kind: str, accepted: tuple[type, ...] | None) -> bool:
+    """Whether robots of ``kind`` have every capability in ``accepted`` (``None``: any robot)."""
+    return accepted is None or set(accepted) <= kind_capabilities(kind)
 
 
 class _Compiler:
@@ -99,8 +98,9 @@ class _Compiler:
         self.spec = mission.spec
         self.context = context
         self.registry = registry
-        self.leaves: list[tuple[MissionNode, Any]] = []  # (node, where it was written)
+        self.leaves: list[tuple[MissionNode[Any], Any]] = []  # (node, where it was written)
         self.names: dict[str, int] = {}
+        self.resources = ResourceChecks(mission)
 
     # ---------------------------------------------------------------- names
     def unique(self, name: str) -> str:
@@ -110,7 +110,7 @@ class _Compiler:
         return name if seen == 1 else f"{name} #{seen}"
 
     # ---------------------------------------------------------------- build
-    def build(self, node: NodeBase) -> Behaviour:
+    def build(self, node: Any) -> Behaviour:  # a node model of the mission (its fields by kind)
         kind = node.kind
         if kind in ("skill", "condition"):
             return self.leaf(kind, getattr(node, kind), node.robot, node.params, node, node.name)
@@ -125,7 +125,7 @@ class _Compiler:
             return py_trees.composites.Selector(name, memory=node.memory, children=[self.build(c) for c in node.selector])
         if kind == "parallel":
             policy = ParallelPolicy.SuccessOnAll() if node.success_on == "all" else ParallelPolicy.SuccessOnOne()
-            return py_trees.composites.Parallel(name, policy=policy, children=[self.build(c) for c in node.parallel])
+            return py_trees.composites.Parallel(name, policy=policy, children=self.parallel_branches(node.parallel))
         if kind == "priorities":
             return Priorities(name, [self.entry(e) for e in node.priorities], self.context)
         if kind == "repeat":
@@ -143,6 +143,16 @@ class _Compiler:
             return py_trees.composites.Selector(name, memory=False, children=[guard, again])
         raise self.mission.error_at(node, f"unknown node type '{kind}'")  # the model admits no other
 
+    def parallel_branches(self, branches: Iterable[NodeBase]) -> list[Behaviour]:
+        """The branches of a ``parallel``, checked not to claim one resource of one robot twice."""
+        built, leaves = [], []
+        for branch in branches:
+            first = len(self.leaves)
+            built.append(self.build(branch))
+            leaves.append(self.leaves[first:])
+        self.resources.check_parallel(leaves, self.spec.team)
+        return built
+
     def entry(self, entry: Any) -> Behaviour:
         do = self.build(entry.do)
         if not entry.when:
@@ -152,7 +162,7 @@ class _Compiler:
         branch.name = self.unique(f"when {branch.describe()}")
         return branch
 
-    def guard(self, guard: Guard) -> Condition:
+    def guard(self, guard: Guard) -> Condition[Any]:
         cls = self.resolve("condition", guard.condition, guard.key_path + (guard.condition,))
         params = dict(guard.params)
         if cls.primary is None:
@@ -171,7 +181,7 @@ class _Compiler:
             params[cls.primary] = guard.argument
         return self.leaf("condition", guard.condition, guard.robot, params, guard, None, cls)  # type: ignore[return-value]
 
-    def resolve(self, kind: str, name: str, where: Any) -> type[MissionNode]:
+    def resolve(self, kind: str, name: str, where: Any) -> type[MissionNode[Any]]:
         try:
             return self.registry.resolve(kind, name)
         except MissionError as err:
@@ -187,8 +197,8 @@ class _Compiler:
         raw_params: dict[str, Any],
         where: Any,
         name: str | None,
-        cls: type[MissionNode] | None = None,
-    ) -> MissionNode:
+        cls: type[MissionNode[Any]] | None = None,
+    ) -> MissionNode[Any]:
         at = where.key_path
         if cls is None:
             cls = self.resolve(kind, type_name, at + (kind,))
@@ -199,25 +209,59 @@ class _Compiler:
             if isinstance(where, Guard):
                 raise self.guard_params_error(exc, where, cls) from None
             raise self.mission.validation_error(exc, at + ("params",), cls.Params) from None
+        self.check_members(cls, params, raw_params, robot, where)
         default = f"{type_name}@{robot}" if robot else type_name
         node = cls(self.unique(name or default), params, self.context, robot)
         node.kind = type_name
         self.leaves.append((node, at))
         return node
 
-    def guard_params_error(self, exc: ValidationError, guard: Guard, cls: type[MissionNode]) -> MissionError:
+    def guard_params_error(self, exc: ValidationError, guard: Guard, cls: type[MissionNode[Any]]) -> MissionError:
         """Errors of a guard's parameters point at the condition key for the primary one."""
         first = exc.errors()[0]
         field_name = first["loc"][0] if first["loc"] else None
-        if field_name == getattr(cls, "primary", None):
+        if isinstance(field_name, str) and field_name == cls.primary:
             info = cls.Params.model_fields[field_name]
             try:  # validate the value alone, so the error points at the condition key
-                TypeAdapter(Annotated[(info.annotation, *info.metadata)]).validate_python(guard.argument)
+                TypeAdapter(info.rebuild_annotation()).validate_python(guard.argument)
             except ValidationError as alone:
                 return self.mission.validation_error(alone, guard.key_path + (guard.condition,), info.annotation)
         return self.mission.validation_error(exc, guard.key_path + ("params",), cls.Params)
 
-    def robot_for(self, cls: type[MissionNode], kind: str, type_name: str, robot: str | None, at: Any) -> str | None:
+    def check_members(
+        self, cls: type[MissionNode[Any]], params: Any, raw_params: dict[str, Any], robot: str | None, where: Any
+    ) -> None:
+        """Parameters naming team members (:class:`~.skill.TeamMember`) name one, with the capability they require."""
+        team = self.spec.team
+        for field_name, info in type(params).model_fields.items():
+            member = team_member_of(info.annotation, info.metadata)
+            value = getattr(params, field_name)
+            if member is None or value is None:
+                continue
+            if isinstance(where, Guard) and field_name == cls.primary:
+                at = where.key_path + (where.condition,)
+            elif field_name in raw_params:
+                at = where.key_path + ("params", field_name)
+            else:
+                at = where.key_path
+            given = "" if field_name in raw_params else " (its default)"
+            if value not in team:
+                raise self.mission.error_at(
+                    at, f"parameter '{field_name}' names '{value}'{given}, which is not a team member",
+                    expected=f"a team member ({one_of(team)})", suggestion=suggest(value, team),
+                )
+            if member.capability is not None and not robot_kind_matches(team[value].robot, (member.capability,)):
+                able = members_with(team, (member.capability,))
+                raise self.mission.error_at(
+                    at, f"parameter '{field_name}' names '{value}' (a {team[value].robot}), which lacks capability "
+                    f"{member.capability.__name__}",
+                    expected=f"a team member with capability {member.capability.__name__} "
+                    f"({one_of(able) if able else 'none in this team'})",
+                )
+
+    def robot_for(
+        self, cls: type[MissionNode[Any]], kind: str, type_name: str, robot: str | None, at: Any
+    ) -> str | None:
         team = self.spec.team
         if not cls.uses_robot:
             if robot is not None:
@@ -244,10 +288,19 @@ class _Compiler:
                 expected=one_of(err.known), suggestion=suggest(robot_kind, err.known),
             ) from None
         if not matches:
+            needs = " and ".join(c.__name__ for c in cls.robot_kinds or ())
+            able = members_with(team, cls.robot_kinds)
             raise self.mission.error_at(
                 at + ("robot",),
                 f"{kind} '{type_name}' cannot run on '{robot}' (a {robot_kind})",
-                expected=f"a robot whose kind or class is {one_of(cls.robot_kinds or ())}",
+                expected=f"a robot with capability {needs} ({one_of(able) if able else 'none in this team'})",
+            )
+        missing = self.resources.missing_sensors(robot_kind, cls.sensors)
+        if missing:
+            raise self.mission.error_at(
+                at + ("robot",),
+                f"{kind} '{type_name}' reads sensor '{missing[0]}', which '{robot}' (a {robot_kind}) does not have",
+                expected="a robot with the sensors " + ", ".join(cls.sensors),
             )
         return robot
 
@@ -268,7 +321,7 @@ class _Compiler:
 
     def listened_commands(self) -> set[str]:
         said = {n.params.command for n, _ in self.leaves if isinstance(n, OperatorSaid)}
-        return said | {c for n, _ in self.leaves for c in getattr(n, "operator_commands", ())}  # skills that ask
+        return said | {c for n, _ in self.leaves for c in n.operator_commands}  # skills that ask
 
     def check_operator_script(self, listens: set[str]) -> None:
         """Scripted operator commands must be control commands or listened to by the tree."""

@@ -13,7 +13,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any
 
 import py_trees
 from py_trees.behaviour import Behaviour
@@ -30,7 +31,7 @@ class GuardedBranch(py_trees.composites.Sequence):
     that guarded it are handled (un-latched).
     """
 
-    def __init__(self, name: str, guards: Sequence[Condition], do: Behaviour, context: RunContext):
+    def __init__(self, name: str, guards: Sequence[Condition[Any]], do: Behaviour, context: RunContext):
         super().__init__(name, memory=False, children=[*guards, do])
         self.guards = list(guards)
         self.do = do
@@ -69,7 +70,7 @@ class Priorities(py_trees.composites.Selector):
         super().__init__(name, memory=False, children=list(children))
         self.context = context
 
-    def tick(self):  # noqa: ANN201 (a py_trees generator)
+    def tick(self) -> Iterator[Behaviour]:
         before = self.current_child if self.status == Status.RUNNING else None
         running = running_leaves(before) if before is not None else []
         for node in super().tick():

@@ -23,10 +23,12 @@ from pydantic import Field
 
 from marsupial.sensing import scan_in_body, sensor_mount
 
+from marsupial.world.capabilities import HasBase, HasBattery, HasLidar
+
 from .skill import Condition, NodeParams
 
 
-class BatteryBelow(Condition):
+class BatteryBelow(Condition["BatteryBelow.Params"]):
     """Holds while the robot's battery monitor reads a state of charge below a fraction.
 
     The gauge reports whole percent (as the vendors' SDKs do), so the
@@ -39,14 +41,14 @@ class BatteryBelow(Condition):
         """State of charge (fraction 0..1) below which the condition holds."""
 
     primary: ClassVar[str] = "threshold"
-    robot_kinds: ClassVar[tuple[str, ...]] = ("Quadrotor",)  # the robots with a battery monitor (world/energy.py)
+    robot_kinds: ClassVar[tuple[type, ...]] = (HasBattery,)  # the robots with a battery monitor (world/energy.py)
 
     def check(self) -> bool:
         status = self.robot.battery()
         return status is not None and status.soc_percent < 100.0 * self.params.threshold
 
 
-class OperatorSaid(Condition):
+class OperatorSaid(Condition["OperatorSaid.Params"]):
     """Holds while the operator's command is pending (said and not yet handled).
 
     Inside ``priorities`` the command is handled when the guarded branch
@@ -79,7 +81,7 @@ class OperatorSaid(Condition):
         return f"operator({self.params.command}){why}"
 
 
-class ObstacleAhead(Condition):
+class ObstacleAhead(Condition["ObstacleAhead.Params"]):
     """Holds when the robot's LiDAR sees an echo in front of it within a distance.
 
     The corridor is ``width`` wide, centred on the robot's heading, from its
@@ -100,7 +102,7 @@ class ObstacleAhead(Condition):
         """The planar LiDAR read (its URDF link has the same name)."""
 
     primary: ClassVar[str] = "distance"
-    robot_kinds: ClassVar[tuple[str, ...]] = ("MobileManipulator",)  # the robots with a LiDAR
+    robot_kinds: ClassVar[tuple[type, ...]] = (HasBase, HasLidar)  # the wheeled robots with a planar LiDAR
 
     def check(self) -> bool:
         p = self.params
@@ -113,7 +115,7 @@ class ObstacleAhead(Condition):
         return bool(np.any((x >= p.front) & (x <= p.front + p.distance) & (np.abs(y) <= 0.5 * p.width)))
 
 
-class AreaExplored(Condition):
+class AreaExplored(Condition["AreaExplored.Params"]):
     """Holds when the explored fraction on the blackboard reaches a threshold."""
 
     class Params(NodeParams):
@@ -130,7 +132,7 @@ class AreaExplored(Condition):
         return float(self.read(self.params.key, 0.0)) >= self.params.fraction
 
 
-class DifficultArea(Condition):
+class DifficultArea(Condition["DifficultArea.Params"]):
     """Holds when the robot's estimated position is within a distance of a declared zone or plan element tagged as difficult.
 
     Zones and plan elements (door frames) come from the building plan the
@@ -158,7 +160,7 @@ class DifficultArea(Condition):
         )
 
 
-class Timer(Condition):
+class Timer(Condition["Timer.Params"]):
     """Holds once the simulated time reaches a given number of seconds since the run started."""
 
     class Params(NodeParams):

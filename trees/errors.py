@@ -37,10 +37,10 @@ def format_key_path(key_path: KeyPathLike) -> str:
 
 def one_of(names: Iterable[Any]) -> str:
     """``"one of a, b, c"`` for an expectation listing the known names (sorted); a single name alone."""
-    names = sorted(str(n) for n in names)
-    if len(names) == 1:
-        return names[0]
-    return f"one of {', '.join(names)}" if names else "none are defined"
+    texts = sorted(str(n) for n in names)
+    if len(texts) == 1:
+        return texts[0]
+    return f"one of {', '.join(texts)}" if texts else "none are defined"
 
 
 class MissionError(Exception):

@@ -33,7 +33,7 @@ import queue
 import threading
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import TextIO
+from typing import Any, TextIO
 
 #: commands the runner handles above the tree
 CONTROL_COMMANDS = ("abort", "pause", "resume")
@@ -66,7 +66,7 @@ class OperatorChannel:
             source (``marsupial verify`` re-sends a log's live commands this way).
     """
 
-    def __init__(self, script: Iterable[tuple] = ()):
+    def __init__(self, script: Iterable[tuple[Any, ...]] = ()):
         entries = [(float(e[0]), e[1], e[2], e[3] if len(e) > 3 else "script") for e in script]
         self._script = sorted(entries, key=lambda e: e[0])
         self._next_scripted = 0

@@ -17,13 +17,14 @@ import importlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 from importlib.metadata import entry_points
 
 from .errors import MissionError, one_of, suggest
 from .skill import Condition, MissionNode, Skill
 
 #: node kind -> (entry-point group, base class)
-GROUPS: dict[str, tuple[str, type[MissionNode]]] = {
+GROUPS: dict[str, tuple[str, type[MissionNode[Any]]]] = {
     "skill": ("marsupial.skills", Skill),
     "condition": ("marsupial.conditions", Condition),
 }
@@ -96,7 +97,7 @@ class Registry:
         """Installed providers of ``name``."""
         return installed(kind).get(name, ())
 
-    def resolve(self, kind: str, name: str) -> type[MissionNode]:
+    def resolve(self, kind: str, name: str) -> type[MissionNode[Any]]:
         """The class implementing node ``name`` of ``kind``; MissionError if unknown or ambiguous."""
         group, base = GROUPS[kind]
         if name in self.pins:
@@ -124,11 +125,11 @@ class Registry:
             raise MissionError(f"entry point '{name}' of group {group} ({providers[0]}) is not a {base.__name__}")
         return cls
 
-    def skill(self, name: str) -> type[Skill]:
+    def skill(self, name: str) -> type[Skill[Any]]:
         """The skill class called ``name``."""
         return self.resolve("skill", name)  # type: ignore[return-value]
 
-    def condition(self, name: str) -> type[Condition]:
+    def condition(self, name: str) -> type[Condition[Any]]:
         """The condition class called ``name``."""
         return self.resolve("condition", name)  # type: ignore[return-value]
 

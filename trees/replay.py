@@ -272,7 +272,9 @@ def _tree_snapshots(topics: dict[str, list[Message]]) -> list[TreeSnapshot]:
     """Replay ``/tree/xml`` and ``/tree`` in time order into full status snapshots."""
     xml_messages = topics.get("/tree/xml", [])
     snapshots: list[TreeSnapshot] = []
-    xml, names, statuses = "", {}, {}
+    xml = ""
+    names: dict[int, str] = {}
+    statuses: dict[int, str] = {}
     i = 0
     for message in topics.get("/tree", []):
         while i < len(xml_messages) and xml_messages[i].t <= message.t:

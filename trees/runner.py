@@ -156,7 +156,7 @@ def build_world(mission: Mission, seed: int, gui: bool = False) -> World:
     return world
 
 
-def _located(mission: Mission, key_path: tuple, err: Exception) -> MissionError:
+def _located(mission: Mission, key_path: tuple[Any, ...], err: Exception) -> MissionError:
     if isinstance(err, UnknownNameError):
         return mission.error_at(key_path, f"unknown {err.kind} '{err.name}'", one_of(err.known), suggest(err.name, err.known))
     return mission.error_at(key_path, str(err))
@@ -440,8 +440,8 @@ def _loop(
             if command.say == "pause" and not paused:
                 paused = True
                 arbiter.new_tick()
-                for robot in world.robots.values():
-                    arbiter.safe_stop(robot, "operator", "operator")
+                for name in world.robots:
+                    arbiter.safe_stop(context.onboard(name), "operator", "operator")
                 context.event("state_change", state="paused")
             elif command.say == "resume" and paused:
                 paused = False

@@ -7,16 +7,28 @@ when the mission is compiled:
   docstrings are the docs; defaults are the papers' values);
 * ``reads`` / ``writes`` — the blackboard keys it uses, formatted with the
   node's ``robot`` and its parameters (``"{robot}/coverage"``, ``"{key}"``);
-* ``robot_kinds`` — the robot kinds it accepts (``None``: any kind; set
-  ``uses_robot = False`` for nodes that take no robot, like ``wait``).
+* ``robot_kinds`` — the capabilities its robot must have (protocols of
+  :mod:`marsupial.world.capabilities`, e.g. ``(Rotorcraft,)``; ``None``: any
+  robot; set ``uses_robot = False`` for nodes that take no robot, like
+  ``wait``) and ``sensors``, the sensors it reads on it;
+* ``claims`` — the robot resources a skill commands (``"rotors"`` on its own
+  robot, ``"{carrier}/arm"`` on the member a parameter names); the compiler
+  refuses two parallel branches claiming one resource, and a command to a
+  resource not claimed is an error.
+
+A node is generic in its parameter class: ``class Goto(Skill[GotoParams])``
+or, for a nested class, ``class Goto(Skill["Goto.Params"])``; ``Params``
+is then that class and ``self.params`` is typed as it.
 
 A :class:`Skill`'s life cycle maps onto py_trees': :meth:`Skill.start`
 (``initialise``), :meth:`Skill.step` (``update``, returns a status and sets
 ``self.feedback_message``) and :meth:`Skill.finish` (``terminate``, on
 SUCCESS, FAILURE or INVALID = preempted or stopped by its parent). The
 default ``finish`` leaves the robot safe through the arbiter
-(``robot.safe_stop()`` unless the preempting node already commands the
-robot in this tick). ``finish`` is named so because py_trees' own
+(the safe stop of each resource it claims on its robot, unless the
+preempting node already commands that resource in this tick). Every command
+``finish`` sends yields so: the arbiter drops it when another node drove
+the resource in the same tick. ``finish`` is named so because py_trees' own
 ``stop()`` does the tree's bookkeeping and must not be overridden. Every
 start is recorded as a ``state_change`` event (status RUNNING) and every end
 as an ``outcome`` event (SUCCESS, FAILURE or INVALID, with the last
@@ -29,7 +41,7 @@ from __future__ import annotations
 import typing
 from collections.abc import Iterator
 from dataclasses import InitVar, dataclass, field
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, ForwardRef, Generic, TypeVar, cast
 
 import py_trees
 from py_trees.common import Access, Status
@@ -37,12 +49,13 @@ from pydantic import BaseModel, ConfigDict, model_validator
 
 from marsupial.world.errors import UnknownNameError
 
-from .arbitration import Arbiter, CommandPort, Stamp
+from .arbitration import ANY_RESOURCE, Arbiter, Claimant, CommandPort, Stamp
 
 if TYPE_CHECKING:
     import numpy as np
 
     from marsupial.world import World
+    from marsupial.world.onboard import Onboard
     from marsupial.world.team_link import LinkPort
 
     from .operator import OperatorChannel
@@ -79,6 +92,21 @@ class NodeParams(BaseModel):
             key: tuple(value) if isinstance(value, list) and key in fields and _tuple_field(fields[key].annotation) else value
             for key, value in data.items()
         }
+
+
+@dataclass(frozen=True)
+class TeamMember:
+    """Marks a string parameter as the name of a team member, optionally one with a capability.
+
+    ``carrier: Annotated[str, TeamMember(Carrier)] = "carrier"``: the
+    compiler checks, like ``robot:``, that the value names a member of the
+    mission's ``team:`` (with a did-you-mean) whose kind has ``capability``
+    (a protocol of :mod:`marsupial.world.capabilities`), and reports the
+    parameter's file:line otherwise. An optional member
+    (``Annotated[str, TeamMember()] | None``) is checked when given.
+    """
+
+    capability: type | None = None
 
 
 @dataclass
@@ -129,8 +157,11 @@ class RunContext:
         """Names of the team members."""
         return tuple(self.__world.robots) if self.__world is not None else ()
 
-    def onboard(self, name: str) -> Any:
-        """The onboard interface of team member ``name`` (:mod:`marsupial.world.onboard`); the error lists the team."""
+    def onboard(self, name: str) -> Onboard:
+        """The onboard interface of team member ``name`` (:mod:`marsupial.world.onboard`); the error lists the team.
+
+        Nodes command and read it through their ports (:meth:`MissionNode.member`), which arbitrate its commands.
+        """
         from marsupial.world.onboard import onboard_of
 
         return onboard_of(self._require_world(f"robot '{name}'").robot(name))
@@ -181,31 +212,72 @@ class RunContext:
             self.recorder.log_image(self.now, camera, rgb, **options)
 
 
-class MissionNode(py_trees.behaviour.Behaviour):
+P = TypeVar("P", bound=NodeParams)
+
+
+def _params_argument(cls: type) -> type[NodeParams] | None:
+    """The parameter class ``cls`` names as its generic argument (``Skill[GotoParams]``, ``Skill["Goto.Params"]``)."""
+    for base in cls.__dict__.get("__orig_bases__", ()):
+        for arg in typing.get_args(base):
+            if isinstance(arg, TypeVar):
+                return cast("type[NodeParams] | None", arg.__bound__)
+            if isinstance(arg, (str, ForwardRef)):
+                text = arg if isinstance(arg, str) else arg.__forward_arg__
+                if text != f"{cls.__name__}.Params" or "Params" not in cls.__dict__:
+                    raise TypeError(f"{cls.__name__}: a parameter class given as a string names '{cls.__name__}.Params'")
+                return cast("type[NodeParams]", cls.__dict__["Params"])
+            if isinstance(arg, type):
+                return arg
+    return None
+
+
+class MissionNode(py_trees.behaviour.Behaviour, Generic[P]):
     """Base of skills and conditions: parameters, blackboard ports, the robot it acts on.
 
     Subclasses are built by the compiler as ``cls(name, params, context, robot)``.
     """
 
-    class Params(NodeParams):
-        """No parameters."""
+    #: the parameter class (the generic argument; :class:`NodeParams`: no parameters)
+    Params: ClassVar[type[NodeParams]] = NodeParams
+    params: P
 
     #: blackboard keys read / written, formatted with ``robot`` and the parameters
     reads: ClassVar[tuple[str, ...]] = ()
     writes: ClassVar[tuple[str, ...]] = ()
-    #: robot kinds accepted (``None``: any kind); ignored when ``uses_robot`` is False
-    robot_kinds: ClassVar[tuple[str, ...] | None] = None
+    #: capabilities its robot must have (``None``: any robot); ignored when ``uses_robot`` is False
+    robot_kinds: ClassVar[tuple[type, ...] | None] = None
+    #: sensors it reads on its robot (short names, checked against the robot kind when it declares its sensors)
+    sensors: ClassVar[tuple[str, ...]] = ()
+    #: resources it commands: ``"<resource>"`` of its robot or ``"{param}/<resource>"`` of a member (``None``: every
+    #: resource of its robot)
+    claims: ClassVar[tuple[str, ...] | None] = ()
     #: whether the node acts on / observes one team robot
     uses_robot: ClassVar[bool] = True
+    #: a condition's parameter set by the compact guard form (``Condition.primary``); ``None`` for skills
+    primary: ClassVar[str | None] = None
 
-    def __init__(self, name: str, params: NodeParams | None = None, context: RunContext | None = None, robot: str | None = None):
+    @property
+    def operator_commands(self) -> tuple[str, ...]:
+        """Operator commands this node consumes (the compiler accepts them in a mission's operator script)."""
+        return ()
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        argument = _params_argument(cls)
+        if argument is not None:
+            cls.Params = argument
+        if not (isinstance(cls.Params, type) and issubclass(cls.Params, NodeParams)):
+            raise TypeError(f"{cls.__name__}: its parameter class must derive from NodeParams, not {cls.Params!r}")
+
+    def __init__(self, name: str, params: P | None = None, context: RunContext | None = None, robot: str | None = None):
         super().__init__(name)
-        self.params = params if params is not None else self.Params()
+        self.params = params if params is not None else cast(P, self.Params())
         self.context = context if context is not None else RunContext()
         self.robot_name = robot
         #: registry name of the node (``"goto"``, ``"battery_below"``); set by the compiler
         self.kind: str = type(self).__name__.lower()
         self._port: CommandPort | None = None
+        self._claimant = Claimant(self.id, name, frozenset(self.claimed(self.params, robot)))
         self.blackboard = self.attach_blackboard_client(name=name)
         for key in self.read_keys(self.params, robot):
             self.blackboard.register_key(key, access=Access.READ)
@@ -214,19 +286,36 @@ class MissionNode(py_trees.behaviour.Behaviour):
 
     # --------------------------------------------------------- declarations
     @classmethod
-    def _format_keys(cls, keys: tuple[str, ...], params: NodeParams, robot: str | None) -> tuple[str, ...]:
+    def _format_keys(cls, keys: tuple[str, ...], params: P, robot: str | None) -> tuple[str, ...]:
         values = {**params.model_dump(), "robot": robot}
         return tuple(key.format(**values) for key in keys)
 
     @classmethod
-    def read_keys(cls, params: NodeParams, robot: str | None) -> tuple[str, ...]:
+    def read_keys(cls, params: P, robot: str | None) -> tuple[str, ...]:
         """Blackboard keys this node reads, for these parameters and robot."""
         return cls._format_keys(cls.reads, params, robot)
 
     @classmethod
-    def write_keys(cls, params: NodeParams, robot: str | None) -> tuple[str, ...]:
+    def write_keys(cls, params: P, robot: str | None) -> tuple[str, ...]:
         """Blackboard keys this node writes, for these parameters and robot."""
         return cls._format_keys(cls.writes, params, robot)
+
+    @classmethod
+    def claimed(cls, params: P, robot: str | None) -> tuple[tuple[str, str], ...]:
+        """``(robot, resource)`` pairs this node commands, for these parameters and robot (resource ``*``: any).
+
+        A claim on a member named by a parameter left unset (``None``) claims nothing.
+        """
+        if cls.claims is None:
+            return ((robot, ANY_RESOURCE),) if robot is not None else ()
+        values = {**params.model_dump(), "robot": robot}
+        pairs = []
+        for claim in cls.claims:
+            member, _, resource = claim.rpartition("/")
+            name = member.format(**values) if member else robot
+            if name not in (None, "None"):
+                pairs.append((str(name), resource))
+        return tuple(pairs)
 
     @classmethod
     def summary(cls) -> str:
@@ -268,8 +357,8 @@ class MissionNode(py_trees.behaviour.Behaviour):
         return self._port
 
     def member(self, name: str) -> CommandPort:
-        """Team member ``name``'s onboard interface as this node commands it (stamped by the run's arbiter)."""
-        return CommandPort(self.context.onboard(name), self.context.arbiter, self.id, self.name)
+        """Team member ``name``'s onboard interface as this node commands it (claimed resources, via the arbiter)."""
+        return CommandPort(self.context.onboard(name), self.context.arbiter, self._claimant)
 
     @property
     def link(self) -> LinkPort:
@@ -290,18 +379,25 @@ class MissionNode(py_trees.behaviour.Behaviour):
         self.blackboard.set(key, value, overwrite=True)
 
 
-class Skill(MissionNode):
+class Skill(MissionNode[P]):
     """Base of skills: override :meth:`start`, :meth:`step` and, if needed, :meth:`finish`.
 
     ``self.robot`` sends arbitrated commands; :attr:`stopped_by` tells, after
-    :meth:`leave_safe`, whether the safe-stop was applied (``None``) or
-    which node's command in the same tick kept the robot.
+    :meth:`finish`, whether its commands and safe-stops were applied
+    (``None``) or which node's command in the same tick kept a resource.
+    A skill that declares no ``claims`` claims every resource of its robot.
     """
+
+    claims: ClassVar[tuple[str, ...] | None] = None
 
     def __init__(self, *args: Any, **kwargs: Any):
         super().__init__(*args, **kwargs)
         self._active = False
-        self.stopped_by: Stamp | None = None
+
+    @property
+    def stopped_by(self) -> Stamp | None:
+        """The stamp of another node's command that kept one of its resources when it finished, else ``None``."""
+        return self._claimant.kept
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -324,14 +420,14 @@ class Skill(MissionNode):
         self.leave_safe()
 
     def leave_safe(self) -> None:
-        """Arbitrated ``safe_stop`` of the skill's robot (a no-op for skills without a robot)."""
+        """Arbitrated safe stop of the resources the skill claims on its robot (a no-op for skills without a robot)."""
         if self.uses_robot and self.robot_name is not None:
-            self.stopped_by = self.robot.safe_stop()
+            self.robot.safe_stop()
 
     # ------------------------------------------------------ py_trees hooks
     def initialise(self) -> None:
         self._active = True
-        self.stopped_by = None
+        self._claimant.kept = None
         self.feedback_message = ""
         self.context.event("state_change", node=self.name, skill=self.kind, robot=self.robot_name, status="RUNNING")
         self.start()
@@ -342,21 +438,24 @@ class Skill(MissionNode):
     def terminate(self, new_status: Status) -> None:
         if self._active:  # py_trees may stop a finished node again with INVALID: finish once
             self._active = False
-            self.finish(new_status)
+            self._claimant.finishing = True  # its commands now yield to a node that took the resource this tick
+            try:
+                self.finish(new_status)
+            finally:
+                self._claimant.finishing = False
             self.context.event(
                 "outcome", node=self.name, skill=self.kind, robot=self.robot_name,
                 status=new_status.name, message=self.feedback_message,
             )
 
 
-class Condition(MissionNode):
+class Condition(MissionNode[P]):
     """Base of conditions: implement :meth:`check`; the node is SUCCESS when it holds, else FAILURE.
 
     ``primary`` names the parameter given as the value of the compact guard
     form (``{battery_below: 0.2, robot: uav}`` sets ``threshold``).
     """
 
-    primary: ClassVar[str | None] = None
     btcpp_kind: ClassVar[str] = "Condition"  # BehaviorTree.CPP export (trees/btxml.py)
 
     def check(self) -> bool:

@@ -57,7 +57,7 @@ class Resolved:
     """
 
     data: Any
-    notes: dict[tuple, str] = field(default_factory=dict)
+    notes: dict[tuple[Any, ...], str] = field(default_factory=dict)
     unknown: list[MissionError] = field(default_factory=list)
 
 
@@ -78,7 +78,7 @@ def resolve_references(
     """
     result = Resolved(None)
 
-    def resolve(value: Any, path: tuple) -> Any:
+    def resolve(value: Any, path: tuple[Any, ...]) -> Any:
         if isinstance(value, dict):
             resolved = {k: resolve(v, path + (k,)) for k, v in value.items() if k != MERGE_KEY}
             if MERGE_KEY not in value:

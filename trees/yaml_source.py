@@ -67,7 +67,7 @@ class SourceDoc:
     file: str
     text: str
     data: Any
-    positions: dict[tuple, Position] = field(default_factory=dict)
+    positions: dict[tuple[Any, ...], Position] = field(default_factory=dict)
 
     def locate(self, key_path: KeyPathLike) -> Position:
         """1-based (line, column) of ``key_path``, or of its nearest existing ancestor."""
@@ -113,7 +113,7 @@ def _is_group_merge(key_node: yaml.Node, value_node: yaml.Node) -> bool:
     )
 
 
-def _build(loader: _Loader, node: yaml.Node, path: tuple, doc: SourceDoc, budget: list[int]) -> Any:
+def _build(loader: _Loader, node: yaml.Node, path: tuple[Any, ...], doc: SourceDoc, budget: list[int]) -> Any:
     """Plain value of ``node``, recording positions under ``path``; duplicate keys are errors.
 
     ``budget`` holds the number of values still allowed (:data:`MAX_VALUES`, shared by the whole document).

@@ -289,7 +289,9 @@ class DisturbanceSchedule:
         self._add(f"{what} {sensor.name}", key, value, when)
 
     def _add(self, label: str, key: tuple[Any, ...], value: Any, when: When) -> None:
-        rng = self._world().rng_for(f"disturbance/{label}/{sum(e.label == label for e in self._effects)}")
+        world = self._world()
+        assert world is not None, "the world owns this schedule: it outlives it"
+        rng = world.rng_for(f"disturbance/{label}/{sum(e.label == label for e in self._effects)}")
         self._effects.append(_Effect(label, self._targets[key], value, when.windows(rng)))
         self.update()
 

@@ -10,11 +10,13 @@ not depend on where the mobile base is. Units: metres, radians.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+
+from marsupial.geometry import Vector
 
 from .assets import asset_path
 from .errors import UnknownNameError
@@ -131,7 +133,7 @@ class ArmKinematics:
         except KeyError:
             raise UnknownNameError("link of the arm model", frame, self._links) from None
 
-    def _q(self, q: Sequence[float]) -> np.ndarray:
+    def _q(self, q: Vector) -> np.ndarray:
         q = np.asarray(q, dtype=float)
         if q.shape != (self.model.nq,):
             raise ValueError(
@@ -139,19 +141,19 @@ class ArmKinematics:
             )
         return q
 
-    def forward(self, q: Sequence[float], frame: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def forward(self, q: Vector, frame: str | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Position (m) and rotation matrix of ``frame`` (default: the tip) in the base frame, at ``q``."""
         M = self.transform(q, frame)
         return M[:3, 3].copy(), M[:3, :3].copy()
 
-    def transform(self, q: Sequence[float], frame: str | None = None) -> np.ndarray:
+    def transform(self, q: Vector, frame: str | None = None) -> np.ndarray:
         """4×4 homogeneous transform ``T_base_frame`` of ``frame`` (default: the tip) at ``q``."""
         fid = self._frame_id(frame)
         pin.forwardKinematics(self.model, self.data, self._q(q))
         oMf = pin.updateFramePlacement(self.model, self.data, fid)
         return (self._M_base_root * oMf).homogeneous
 
-    def jacobian(self, q: Sequence[float], frame: str | None = None) -> np.ndarray:
+    def jacobian(self, q: Vector, frame: str | None = None) -> np.ndarray:
         """6×n Jacobian of ``frame`` (default: the tip) at ``q``.
 
         Rows 0-2 map joint speeds to the linear velocity (m/s) of the frame
@@ -163,11 +165,11 @@ class ArmKinematics:
         R = self._R_base_root
         return np.vstack((R @ J[:3], R @ J[3:]))
 
-    def within_limits(self, q: Sequence[float], tolerance: float = 0.0) -> bool:
+    def within_limits(self, q: Vector, tolerance: float = 0.0) -> bool:
         """True when every joint of ``q`` is within its limits (± ``tolerance`` rad)."""
         q = self._q(q)
         return bool(np.all(q >= self.lower - tolerance) and np.all(q <= self.upper + tolerance))
 
-    def clip(self, q: Sequence[float]) -> np.ndarray:
+    def clip(self, q: Vector) -> np.ndarray:
         """``q`` with every joint clipped into its limits."""
         return np.clip(self._q(q), self.lower, self.upper)

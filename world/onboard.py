@@ -11,7 +11,9 @@ sensors, the recorder and scoring) plus an onboard interface, built here:
   (:class:`~marsupial.world.estimation.external.VisionFix`, on the team link);
 - the states its devices report (motor arming, docking switches, magnet,
   lift encoder) and its joint and wheel encoders;
-- its command inputs (the names in :attr:`Onboard.commands`);
+- its command inputs (:attr:`Onboard.commands`, each driving one of the
+  robot's resources, :data:`~marsupial.world.capabilities.RESOURCES`) and
+  the per-resource safe stop (:meth:`Onboard.safe_stop`);
 - its static model: mount extrinsics, URDF link offsets, arm kinematics,
   limits — what its designers wrote down, not what the world measures.
 
@@ -25,7 +27,7 @@ mission with truth calls from skill code trapped
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from types import CodeType
 from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
@@ -184,16 +186,22 @@ class SensorPort:
 
 
 class Onboard:
-    """Base of onboard interfaces: name, kind, sensors, state estimate, safe stop, static link model.
+    """Base of onboard interfaces: name, kind, sensors, state estimate, per-resource safe stop, static link model.
 
-    Subclasses add their kind's commands (listed in :attr:`commands`, which
-    the run's arbiter stamps) and device states.
+    Subclasses add their kind's commands and device states. :attr:`commands`
+    maps each command method to the resource it drives (``"docking.release"``
+    for a method of the device at attribute ``docking``), which the run's
+    arbiter stamps per robot and resource; :attr:`safe_stops` maps each
+    resource to the command that leaves it safe (a resource without one, like
+    a docking device, keeps its state).
     """
 
-    #: method names that command the robot (stamped by the arbiter, see ``marsupial.trees.arbitration``)
-    commands: ClassVar[frozenset[str]] = frozenset({"safe_stop"})
+    #: command method -> resource it drives (``"device.method"`` for a device's), see ``marsupial.trees.arbitration``
+    commands: ClassVar[Mapping[str, str]] = {}
+    #: resource -> the command method that leaves it safe
+    safe_stops: ClassVar[Mapping[str, str]] = {}
 
-    __slots__ = ("name", "kind", "_Onboard__robot", "_Onboard__ports")
+    __slots__ = ("name", "kind", "__robot", "__ports")  # private slots, name-mangled to _Onboard__…
 
     def __init__(self, robot: Robot):
         self.name = robot.name
@@ -230,10 +238,27 @@ class Onboard:
         """Position (m) and rotation of ``link`` in the base frame, from the robot's URDF (rigid links)."""
         return self.__robot.link_offset(link)
 
+    def provides(self, capability: type) -> bool:
+        """Whether this robot has ``capability`` (a protocol of :mod:`marsupial.world.capabilities`)."""
+        return isinstance(self, capability)
+
+    @classmethod
+    def resources(cls) -> frozenset[str]:
+        """The resources this kind of robot has (those its commands drive)."""
+        return frozenset(cls.commands.values())
+
+    @classmethod
+    def devices(cls) -> frozenset[str]:
+        """Attributes holding devices whose methods are commands (``docking`` of a carrier)."""
+        return frozenset(name.split(".", 1)[0] for name in cls.commands if "." in name)
+
     # ------------------------------------------------------------ commands
-    def safe_stop(self) -> None:
-        """Leave the robot safe (its kind's safe stop: hover, stop the wheels, hold the arm)."""
-        self.__robot.safe_stop()
+    def safe_stop(self, resource: str | None = None) -> None:
+        """Leave ``resource`` safe (all when ``None``) by its safe-stop command: hover, stop the wheels, hold the arm."""
+        for name in sorted(self.resources()) if resource is None else (resource,):
+            method = self.safe_stops.get(name)
+            if method is not None:
+                getattr(self, method)()
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.name!r})"
@@ -253,7 +278,10 @@ class BatteryOnboard(Onboard):
 class QuadrotorOnboard(BatteryOnboard):
     """A quadrotor's onboard computer: velocity commands, motors, estimator hand-over, arming and dock states."""
 
-    commands = frozenset({"command_velocity", "hover", "set_motors", "safe_stop", "reset_estimate"})
+    commands: ClassVar[Mapping[str, str]] = {
+        "command_velocity": "rotors", "hover": "rotors", "set_motors": "rotors", "reset_estimate": "rotors",
+    }
+    safe_stops: ClassVar[Mapping[str, str]] = {"rotors": "_hover_if_flying"}
     __slots__ = ()
 
     def command_velocity(self, vx: float, vy: float, vz: float, yaw_rate: float = 0.0, frame: str = "body") -> None:
@@ -271,6 +299,10 @@ class QuadrotorOnboard(BatteryOnboard):
     def set_motors(self, on: bool) -> None:
         """Start (arm) or stop the motors."""
         self._robot.set_motors(on)  # type: ignore[attr-defined]
+
+    def _hover_if_flying(self) -> None:
+        """The rotors' safe stop: hover in place when flying (motors on, not docked), else nothing."""
+        self._robot.safe_stop()
 
     def reset_estimate(self, position: Sequence[float], yaw: float) -> None:
         """Restart the onboard estimate at ``position`` (m) and ``yaw`` (rad), e.g. handed over by a carrier."""
@@ -310,7 +342,8 @@ class QuadrotorOnboard(BatteryOnboard):
 class WheeledOnboard(Onboard):
     """A wheeled base: drive commands, wheel-encoder speed, drive limits, footprint estimate."""
 
-    commands = frozenset({"drive", "stop", "safe_stop"})
+    commands: ClassVar[Mapping[str, str]] = {"drive": "base", "stop": "base"}
+    safe_stops: ClassVar[Mapping[str, str]] = {"base": "stop"}
     __slots__ = ()
 
     def drive(self, v: float, omega: float) -> None:
@@ -365,7 +398,7 @@ class DockingPort:
     :attr:`charging` (the charger's current sense).
     """
 
-    __slots__ = ("_DockingPort__device",)
+    __slots__ = ("__device",)
 
     def __init__(self, device: Any):
         self.__device = device
@@ -426,7 +459,12 @@ class DockingPort:
 class CarrierOnboard(WheeledOnboard):
     """The mobile manipulator's computer: base, arm (encoders, kinematics), docking device, cameras, LiDAR."""
 
-    commands = frozenset({"drive", "stop", "safe_stop", "set_joint_targets", "hold_arm"})
+    commands: ClassVar[Mapping[str, str]] = {
+        **WheeledOnboard.commands,
+        "set_joint_targets": "arm", "hold_arm": "arm",
+        **{f"docking.{name}": "docking" for name in ("magnet_on", "magnet_off", "lock", "release")},
+    }
+    safe_stops: ClassVar[Mapping[str, str]] = {"base": "stop", "arm": "hold_arm"}  # the docking device keeps its state
     __slots__ = ("docking",)
 
     def __init__(self, robot: Robot):
@@ -443,20 +481,25 @@ class CarrierOnboard(WheeledOnboard):
 
     def joint_positions(self) -> np.ndarray:
         """Arm joint angles (rad) from the joint encoders."""
-        return self._robot.arm_encoders()  # type: ignore[attr-defined, no-any-return]
+        return self._robot.arm_encoders()  # type: ignore[attr-defined]
 
     def joint_targets(self) -> np.ndarray:
         """Arm joint targets being tracked (rad)."""
-        return self._robot.joint_targets()  # type: ignore[attr-defined, no-any-return]
+        return self._robot.joint_targets()  # type: ignore[attr-defined]
 
     def arm_at_target(self, tolerance: float = 0.01) -> bool:
         """True when every encoder reads within ``tolerance`` rad of its target."""
         return bool(np.all(np.abs(self.joint_targets() - self.joint_positions()) <= tolerance))
 
     @property
+    def lidar(self) -> SensorPort:
+        """The planar LiDAR on the base (sensor ``lidar``)."""
+        return self.sensor("lidar")
+
+    @property
     def joint_limits(self) -> tuple[np.ndarray, np.ndarray]:
         """Lower and upper joint limits (rad)."""
-        return self._robot.joint_limits  # type: ignore[attr-defined, no-any-return]
+        return self._robot.joint_limits  # type: ignore[attr-defined]
 
     @property
     def arm_kinematics(self) -> Any:
@@ -465,7 +508,7 @@ class CarrierOnboard(WheeledOnboard):
 
     def arm_pose(self, name: str) -> np.ndarray:
         """Joint angles (rad) of a named arm pose."""
-        return self._robot.arm_pose(name)  # type: ignore[attr-defined, no-any-return]
+        return self._robot.arm_pose(name)  # type: ignore[attr-defined]
 
     def arm_mount(self) -> tuple[np.ndarray, np.ndarray]:
         """Frame M (``arm_base``) in the ``base_footprint`` frame the estimate is of: position (m), rotation (URDF)."""
@@ -481,13 +524,73 @@ class CarrierOnboard(WheeledOnboard):
         return estimate.position + R @ p_M_fp, quaternion_from_matrix(R @ R_fp_M)
 
 
+class ManipulatorOnboard(WheeledOnboard):
+    """A wheeled base with an arm and a gripper (the ``mms``): joint targets and encoders, gripper commands."""
+
+    commands: ClassVar[Mapping[str, str]] = {
+        **WheeledOnboard.commands,
+        "set_joint_targets": "arm", "hold_arm": "arm", "open_gripper": "gripper", "close_gripper": "gripper",
+    }
+    safe_stops: ClassVar[Mapping[str, str]] = {"base": "stop", "arm": "hold_arm"}  # the gripper keeps what it holds
+    __slots__ = ()
+
+    def set_joint_targets(self, q: Sequence[float]) -> None:
+        """Move the arm toward joint angles ``q`` (6 values, rad)."""
+        self._robot.set_joint_targets(q)  # type: ignore[attr-defined]
+
+    def hold_arm(self) -> None:
+        """Hold the arm joints where they are now."""
+        self._robot.hold_arm()  # type: ignore[attr-defined]
+
+    def joint_positions(self) -> np.ndarray:
+        """Arm joint angles (rad) from the joint encoders."""
+        return self._robot.arm_encoders()  # type: ignore[attr-defined]
+
+    def open_gripper(self) -> None:
+        """Open the fingers."""
+        self._robot.open_gripper()  # type: ignore[attr-defined]
+
+    def close_gripper(self) -> None:
+        """Close the fingers."""
+        self._robot.close_gripper()  # type: ignore[attr-defined]
+
+    def gripper_opening(self) -> float:
+        """Gap between the fingers (m), from their encoder."""
+        return float(self._robot.gripper_opening())  # type: ignore[attr-defined]
+
+
+class LiftOnboard(WheeledOnboard):
+    """A wheeled base with a lifting docking station (the ``mother_ugv``): raise, lower, platform height."""
+
+    commands: ClassVar[Mapping[str, str]] = {
+        **WheeledOnboard.commands, "raise_platform": "lift", "lower_platform": "lift",
+    }
+    safe_stops: ClassVar[Mapping[str, str]] = {"base": "stop", "lift": "_hold_lift"}
+    __slots__ = ()
+
+    def raise_platform(self) -> list[str]:
+        """Raise the platform; returns the team members it lifts."""
+        return list(self._robot.raise_platform())  # type: ignore[attr-defined]
+
+    def lower_platform(self) -> None:
+        """Lower the platform to the floor (the children roll off there)."""
+        self._robot.lower_platform()  # type: ignore[attr-defined]
+
+    def platform_height(self) -> float:
+        """Platform height (m) from the lift encoder."""
+        return float(self._robot.platform_height())  # type: ignore[attr-defined]
+
+    def _hold_lift(self) -> None:
+        """The lift's safe stop: hold the platform where it is."""
+        self._robot.hold_lift()  # type: ignore[attr-defined]
+
+
 def onboard_of(robot: Robot) -> Onboard:
     """The onboard interface of ``robot`` (its class's ``onboard_class``), built once and kept on the robot."""
-    port = getattr(robot, "_onboard", None)
+    port = robot._onboard
     if port is None:
-        port = robot.onboard_class(robot)
-        robot._onboard = port
-    return port  # type: ignore[no-any-return]
+        port = robot._onboard = robot.onboard_class(robot)
+    return port
 
 
 def base_frame_offset(p_base: np.ndarray, q_base: np.ndarray, p_link: np.ndarray, q_link: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

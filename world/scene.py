@@ -442,7 +442,7 @@ def _make_zone(spec: _Fields) -> Zone:
     label = spec.text("label")
     center = np.array(spec.vector("position", 3, expected="[x, y, z] of the zone's centre in metres"))
     half = np.array(spec.vector("size", 3, expected="[x, y, z] extent in metres (> 0)", positive=True)) / 2
-    return Zone(label, tuple((center - half).tolist()), tuple((center + half).tolist()), spec.tags())  # type: ignore[arg-type]
+    return Zone(label, tuple((center - half).tolist()), tuple((center + half).tolist()), spec.tags())
 
 
 def _read_paths(spec: Any) -> dict[str, np.ndarray]:

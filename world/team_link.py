@@ -125,7 +125,7 @@ class TeamLink:
 class LinkPort:
     """The team link as one robot's computer uses it: send as that robot, read what the others sent."""
 
-    __slots__ = ("name", "_LinkPort__link")
+    __slots__ = ("name", "__link")  # the private slot is name-mangled to _LinkPort__link
 
     def __init__(self, link: TeamLink, name: str):
         self.name = name

@@ -18,23 +18,24 @@ from typing import ClassVar, Literal
 
 from pydantic import Field
 
-from marsupial.trees.skill import Condition, NodeParams
+from marsupial.trees.skill import Condition, NodeParams, P
+from marsupial.world.capabilities import Rotorcraft
 
 from .tracking import TrackingModule
 
 
-class _TrackingCondition(Condition):
+class _TrackingCondition(Condition[P]):
     """Base: reads the UAV's tracking module from the blackboard."""
 
     reads = ("{robot}/tracking",)
-    robot_kinds = ("ardrone2",)
+    robot_kinds = (Rotorcraft,)
 
     def module(self) -> TrackingModule | None:
         """The UAV's tracking module, ``None`` before its first flight."""
         return self.read(f"{self.robot_name}/tracking")
 
 
-class PlatformLost(_TrackingCondition):
+class PlatformLost(_TrackingCondition["PlatformLost.Params"]):
     """Holds while the platform must be re-localised (§3.1): unseen too long, or too far off in the final descent."""
 
     class Params(NodeParams):
@@ -64,7 +65,7 @@ class PlatformLost(_TrackingCondition):
         return super().describe() + (f": {why}" if why else "")
 
 
-class Landed(_TrackingCondition):
+class Landed(_TrackingCondition["Landed.Params"]):
     """Holds while the UAV is in the landed state: down on the moving platform, motors off (§3.1)."""
 
     class Params(NodeParams):
@@ -79,7 +80,7 @@ class Landed(_TrackingCondition):
         return landed == self.params.value
 
 
-class FlightTime(_TrackingCondition):
+class FlightTime(_TrackingCondition["FlightTime.Params"]):
     """Holds once the UAV has flown a number of seconds since its take-off or since it reached the nominal height."""
 
     class Params(NodeParams):

@@ -202,13 +202,14 @@ def detect_platform(
     polygon = cv2.approxPolyDP(hull, p.approx_epsilon * cv2.arcLength(hull, True), True)
     polygon = polygon.reshape(-1, 2).astype(float) + (x0, y0)
     truncated = border and bool(_on_border(contour.reshape(-1, 2) + (x0, y0), cols, rows).any())
-    if truncated and p.platform_side_m is not None:
+    if truncated and p.platform_side_m is not None and edge_px is not None:
         side_px = p.platform_side_m * 0.5 * (K[0, 0] + K[1, 1]) / height_m
         contour_px = contour.reshape(-1, 2).astype(float) + (x0, y0)
         edge_px = edge_px.reshape(-1, 2).astype(float) + (x0, y0)
-        polygon = _complete_square(polygon, contour_px, edge_px, lines, side_px, cols, rows, p.min_side_support_px)
-        if polygon is None:
+        completed = _complete_square(polygon, contour_px, edge_px, lines, side_px, cols, rows, p.min_side_support_px)
+        if completed is None:
             return None
+        polygon = completed
     m = cv2.moments(polygon.astype(np.float32))  # line 9: first-order moments of the polygon area
     if m["m00"] < p.min_area_px:
         return None
@@ -278,8 +279,8 @@ def _complete_square(
         for _, support in _seen_sides(axis, contour, edge_px, visible_centroid, min_support)
     ]
     if fits:
-        fits = np.asarray(fits)
-        theta = _mean_side_angle(np.arctan2(fits[:, 1], fits[:, 0]), np.ones(len(fits)))
+        directions = np.asarray(fits)
+        theta = _mean_side_angle(np.arctan2(directions[:, 1], directions[:, 0]), np.ones(len(directions)))
     centre = np.zeros(2)
     for axis in _axes(theta):
         sides = [

@@ -23,6 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from marsupial.geometry import Vector
+
 _H = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]])  # observation model: position only
 
 
@@ -66,7 +68,7 @@ class ConstantVelocityKF:
         self.P = np.eye(4)
         self._R = params.measurement_noise * np.eye(2)
 
-    def reset(self, position: np.ndarray, velocity: np.ndarray = (0.0, 0.0)) -> None:
+    def reset(self, position: Vector, velocity: Vector = (0.0, 0.0)) -> None:
         """Start at ``position`` (m) with ``velocity`` (m/s; zero by default) and ``P = I₄``."""
         self.x = np.array([position[0], position[1], velocity[0], velocity[1]], dtype=float)
         self.P = np.eye(4)

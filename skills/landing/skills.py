@@ -34,18 +34,21 @@ speeds m/s, times simulated s.
 
 from __future__ import annotations
 
-from typing import ClassVar, Literal
+from typing import Annotated, ClassVar, Literal, TypeVar, get_args
 
 import numpy as np
 from py_trees.common import Status
 from pydantic import Field, model_validator
 
-from marsupial.trees.skill import NodeParams, Skill
+from marsupial.trees.skill import NodeParams, Skill, TeamMember
+from marsupial.world.capabilities import HasBase, HasPlatform, Rotorcraft
 
 from .touchdown import TouchdownParams, TouchdownTest
 from .tracking import GAIN_SCHEDULES, TrackerConfig, TrackingModule, tracking_module
 
-GainSchedule = Literal[tuple(GAIN_SCHEDULES)]  # type: ignore[valid-type]
+GainSchedule = Literal["table1", "manual_fit"]  # the names of GAIN_SCHEDULES
+if set(get_args(GainSchedule)) != set(GAIN_SCHEDULES):
+    raise ImportError(f"GainSchedule {get_args(GainSchedule)} must name the gain schedules {sorted(GAIN_SCHEDULES)}")
 PAPER_PATH_TIME_S = 0.1  # path time of the prediction, §3.3.2
 
 
@@ -64,7 +67,7 @@ class FlightParams(NodeParams):
     """With the feed-forward: integrate the PI error only while it is within this distance (m), so that a large transient (e.g. the take-off) does not wind the integral up (not in the paper)."""
     nominal_height: float = Field(4.0, gt=0.0)  # nominal tracking height, §3.1
     """Nominal tracking height above the platform (m), §3.1."""
-    platform: str | None = None
+    platform: Annotated[str, TeamMember(HasPlatform)] | None = None
     """Team member carrying the landing platform (default: the only robot with one)."""
 
     def tracker_config(self) -> TrackerConfig:
@@ -76,14 +79,17 @@ class FlightParams(NodeParams):
         )
 
 
-class FlightSkill(Skill):
+PF = TypeVar("PF", bound=FlightParams)
+
+
+class FlightSkill(Skill[PF]):
     """Base of the UAV skills: the shared tracking module and the one command per tick."""
 
-    Params = FlightParams
-    params: FlightParams
     reads = ("{robot}/tracking",)
     writes = ("{robot}/tracking",)
-    robot_kinds = ("ardrone2",)
+    robot_kinds = (Rotorcraft,)
+    sensors = ("bottom_camera", "sonar", "imu")
+    claims = ("rotors",)
 
     def start(self) -> None:
         self.module: TrackingModule = tracking_module(self, self.params.platform)
@@ -126,11 +132,8 @@ class ClimbParams(FlightParams):
     """Height error (m) at which the nominal height counts as reached."""
 
 
-class Takeoff(FlightSkill):
+class Takeoff(FlightSkill[ClimbParams]):
     """Take off from the platform and climb to the nominal height while tracking it (§3.1)."""
-
-    Params = ClimbParams
-    params: ClimbParams
 
     def start(self) -> None:
         super().start()
@@ -154,7 +157,7 @@ class Takeoff(FlightSkill):
         return Status.SUCCESS
 
 
-class Follow(FlightSkill):
+class Follow(FlightSkill["Follow.Params"]):
     """Track the platform at the nominal height, for a time or until stopped (§3.1, tracking)."""
 
     class Params(FlightParams):
@@ -199,7 +202,7 @@ class TrackPredictive(Follow):
         """Tracking controller: always ``predictive`` (§3.3.2) for this skill."""
 
 
-class Land(FlightSkill):
+class Land(FlightSkill["Land.Params"]):
     """Descend onto the moving platform while tracking it; motors off once landed on it (§3.1, §3.3.1).
 
     Landed (§3.3.1, :mod:`.touchdown`): the sonar reads less than
@@ -269,7 +272,7 @@ class Land(FlightSkill):
             self.leave_safe()
 
 
-class Relocalize(FlightSkill):
+class Relocalize(FlightSkill["Relocalize.Params"]):
     """Find the platform again: climb with the x-y control off until seen, then track up to the nominal height (§3.1).
 
     The search never gives up (the paper's neither): above ``max_height``
@@ -287,6 +290,7 @@ class Relocalize(FlightSkill):
         module.relocalizations += 1
         self.context.metric("relocalizations", module.relocalizations, robot=self.robot_name)
         module.set_state("relocalizing", self, module.pending_relocalization or "")
+        assert module.tracker is not None, "configured by FlightSkill.start"
         module.tracker.pi.reset()  # the authors reset the PI on re-localisation; the filter keeps the platform's motion
         self._located_at_start = module.located
 
@@ -310,7 +314,7 @@ class Relocalize(FlightSkill):
         return Status.SUCCESS
 
 
-class DrivePattern(Skill):
+class DrivePattern(Skill["DrivePattern.Params"]):
     """Drive the UGV along a straight line or a circle, for a time or until stopped (§4.2.1)."""
 
     class Params(NodeParams):
@@ -329,7 +333,8 @@ class DrivePattern(Skill):
                 raise ValueError(f"a linear pattern drives straight: leave omega unset or 0 (got {self.omega})")
             return self
 
-    robot_kinds = ("WheeledRobot",)
+    robot_kinds = (HasBase,)
+    claims = ("base",)
     CIRCLE_OMEGA: ClassVar[float] = 0.05  # rad/s, §4.2.1
 
     def start(self) -> None:

@@ -58,14 +58,14 @@ import math
 from bisect import bisect_left
 from collections import deque
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Generic, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, TypeVar, cast
 
 import cv2
 import numpy as np
 
 from marsupial.geometry import heading_rotation, rotation_matrix, yaw_of
+from marsupial.world.capabilities import HasPlatform
 from marsupial.world.errors import UnknownNameError
-from marsupial.world.onboard import PlatformOnboard
 
 from .control import PIGains, PlatformTracker
 from .detection import DetectionParams, detect_platform, tilt_of
@@ -368,7 +368,7 @@ class TrackingModule:
         if self.tracker is not None:
             self.tracker.observe(stamp, p_nav)
         self.offset = heading_rotation(pose.yaw) @ (p_nav[:2] - pose.uav_position[:2])
-        self.offset_at, self.offset_height = self.now, self._heights.nearest(stamp)
+        self.offset_at, self.offset_height = self.now, cast(float, self._heights.nearest(stamp))  # camera_pose had one
         self.platform_yaw = self._heading_of(detection.polygon, frame.K, pose.rotation)
         self.last_seen = self.now
         self.located += 1
@@ -466,11 +466,11 @@ class TrackingModule:
 def platform_size(node: MissionNode, name: str | None) -> tuple[float, float]:
     """Size (m) of the landing platform: that of team member ``name``, or of the team's only member with one.
 
-    A static prior (the platform robot's model, ``PlatformOnboard.platform_size``).
+    A static prior (the platform robot's model, ``HasPlatform.platform_size``).
     Raises ``UnknownNameError`` / ``ValueError`` naming the candidates.
     """
     context = node.context
-    carriers = {n: ob for n in context.team() if isinstance(ob := context.onboard(n), PlatformOnboard)}
+    carriers = {n: port for n in context.team() if (port := node.member(n)).provides(HasPlatform)}
     if name is not None:
         if name not in carriers:
             raise UnknownNameError("robot with a landing platform", name, carriers)

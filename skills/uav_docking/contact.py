@@ -74,11 +74,12 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.trees.skill import Condition, NodeParams, Skill
+from marsupial.world.capabilities import Rotorcraft
 
 from .pose import invert
 from .relative_hold import PART_A_LINK, part_b_transform
 from .selection import yaw_of_rotation
-from .team import DOCKING_FLAG, PART_B_YAW, carrier_port, phase_event
+from .team import DOCKING_FLAG, PART_B_YAW, CarrierName, carrier_port, phase_event
 from .track import CONTACT_TARGET, TRACKING, ContactTarget, TrackingState
 
 CAPTURE_TIME = 1.0  # s the magnet may take to bring Part B into contact before the capture is retried
@@ -91,11 +92,11 @@ def contact_height(z0: float, t_c: float, k_c: float = K_C) -> float:
     return z0 + k_c * math.log(max(t_c, 0.0) + 1.0)
 
 
-class Contact(Skill):
+class Contact(Skill["Contact.Params"]):
     """After the operator's authorization, raise Part A to the UAV's Part B by eq. (15), then magnet and levers lock it."""
 
     class Params(NodeParams):
-        carrier: str = "carrier"
+        carrier: CarrierName = "carrier"
         """Team member carrying the arm and Part A of the docking device (a mobile_manipulator)."""
         authorization: str | None = "authorize_contact"
         """Operator command that authorizes the contact phase (§IV-B); none: authorized at once (benchmarks)."""
@@ -129,7 +130,8 @@ class Contact(Skill):
         max_cancellations: int = Field(3, ge=0)
         """Cancellations after which the skill fails."""
 
-    robot_kinds = ("Quadrotor",)
+    robot_kinds = (Rotorcraft,)
+    claims = ("{carrier}/docking",)  # the UAV and the arm are track's, which runs beside it
     reads = (f"{{carrier}}/{TRACKING}",)
     writes = (f"{{carrier}}/{CONTACT_TARGET}", f"{{carrier}}/{DOCKING_FLAG}", f"{{carrier}}/{PART_B_YAW}")
 
@@ -185,7 +187,7 @@ class Contact(Skill):
     def await_authorization(self) -> Status:
         command = self.params.authorization
         channel = self.context.operator
-        said = None if channel is None else channel.handle(command)
+        said = None if channel is None or command is None else channel.handle(command)
         if said is None:
             return Status.RUNNING
         self.phase = "settling"
@@ -200,7 +202,7 @@ class Contact(Skill):
             state is not None and state.seen and state.p_B_A is not None
             and state.hold_error <= p.settle_error and state.camera_offset <= p.settle_error
         )
-        if not settled:
+        if not settled or state is None or state.p_B_A is None:  # (the last two: for the type checker)
             self.settled_since = None
             self.feedback_message = "authorized: waiting for stable tracking under the UAV"
             return Status.RUNNING
@@ -231,7 +233,7 @@ class Contact(Skill):
             return self.cancel("no estimate of Part B")
         if not state.seen and state.age() > (p.blind_timeout if gap <= p.blind_range else p.lost_timeout):
             return self.cancel(f"marker lost {gap:.2f} m from Part B ({state.age():.1f} s unseen)")
-        if now - self.t0 > p.timeout:
+        if self.t0 is not None and now - self.t0 > p.timeout:  # t0: set when the approach began
             return self.cancel(f"no lock after {p.timeout:.0f} s of approach")
         lateral = math.hypot(float(p_B_A[0]), float(p_B_A[1]))
         aligned = lateral <= p.align_tolerance
@@ -299,15 +301,15 @@ class Contact(Skill):
         return Status.RUNNING
 
 
-class Stored(Condition):
+class Stored(Condition["Stored.Params"]):
     """Holds while the UAV is locked on its carrier's Part A and no docking or deployment is in progress."""
 
     class Params(NodeParams):
-        carrier: str = "carrier"
+        carrier: CarrierName = "carrier"
         """Team member whose docking device holds the UAV (a mobile_manipulator)."""
 
     primary: ClassVar[str] = "carrier"
-    robot_kinds = ("Quadrotor",)
+    robot_kinds = (Rotorcraft,)
     reads = (f"{{carrier}}/{DOCKING_FLAG}",)
 
     def check(self) -> bool:

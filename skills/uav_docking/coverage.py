@@ -321,7 +321,7 @@ def detect_colour(rgb: np.ndarray, colour: tuple[int, int, int], min_pixels: int
     noise.
     """
     hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)
-    h0, s0, _ = (int(v) for v in cv2.cvtColor(np.uint8([[colour]]), cv2.COLOR_RGB2HSV)[0, 0])
+    h0, s0, _ = (int(v) for v in cv2.cvtColor(np.array([[colour]], dtype=np.uint8), cv2.COLOR_RGB2HSV)[0, 0])
     hue_off = np.abs(((hsv[..., 0].astype(np.int16) - h0 + 90) % 180) - 90)
     mask = ((hue_off <= hue_tolerance) & (hsv[..., 1] >= 0.85 * s0) & (hsv[..., 2] > 60)).astype(np.uint8)
     count, labels, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)

@@ -65,13 +65,15 @@ the floor) is within ``target_range``; then ``target_found`` is written, a
 from __future__ import annotations
 
 import math
+from typing import Annotated
 
 import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.sensing import EstimateHistory, in_nav_frame, sensor_mount
-from marsupial.trees.skill import NodeParams, Skill
+from marsupial.trees.skill import NodeParams, Skill, TeamMember
+from marsupial.world.capabilities import HasBase, Rotorcraft
 from marsupial.world.errors import UnknownNameError
 
 from .coverage import (
@@ -95,11 +97,11 @@ D_TEAM = 6.0  # m, D_team (§V-A): chosen — a room's reach indoors; flying it 
 #                2700 mAh battery (≈ 6 s + 25 s at 85 W), far below the paper's 20 % bound
 
 
-class Explore(Skill):
+class Explore(Skill["Explore.Params"]):
     """Survey the rooms around the carrier with the UAV, stopping every D_e for a yaw sweep, within D_team of the carrier."""
 
     class Params(NodeParams):
-        carrier: str = "carrier"
+        carrier: Annotated[str, TeamMember(HasBase)] = "carrier"
         """Team member the UAV must stay near (the ground robot of §V-A)."""
         D_e: float = Field(D_E, gt=0.0)
         """D_e (§V-A): distance flown between stops for a yaw sweep (m; chosen: 2 m)."""
@@ -144,7 +146,9 @@ class Explore(Skill):
         stop_at_target: bool = True
         """Succeed when the target is found (else keep exploring)."""
 
-    robot_kinds = ("Bebop2", "Tello")  # the quadrotors with a front camera
+    robot_kinds = (Rotorcraft,)
+    sensors = ("front_camera",)
+    claims = ("rotors",)
     writes = ("{coverage_key}", "{target_key}")
 
     # ------------------------------------------------------------ life cycle

@@ -15,12 +15,12 @@ metres; images are ``(h, w)`` grey or ``(h, w, 3)`` RGB uint8.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
+from marsupial.geometry import Vector
 from marsupial.world.apriltag_bundle import TAG_CELLS, TagBundle, load_tag_bundle
 from marsupial.world.kinematics import ArmKinematics
 
@@ -292,7 +292,7 @@ class UavPoseMeasurement:
         q0 = np.zeros(kinematics.dof)  # the offset is rigid: any configuration gives it
         self.T_F_C = invert(kinematics.transform(q0, flange_link)) @ kinematics.transform(q0, camera_link)
 
-    def measure(self, image: np.ndarray, q: Sequence[float]) -> UavPose | None:
+    def measure(self, image: np.ndarray, q: Vector) -> UavPose | None:
         """P_Q^M from one image taken at joint angles ``q`` (rad); ``None`` when no bundle tag is visible."""
         T_M_F = self.kinematics.transform(q, self.flange_link)  # F(q)
         R_M_C = T_M_F[:3, :3] @ self.T_F_C[:3, :3]

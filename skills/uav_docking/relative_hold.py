@@ -35,11 +35,13 @@ from pydantic import Field
 
 from marsupial.geometry import rot_z, rotation_matrix, transform
 from marsupial.trees.skill import NodeParams, Skill
+from marsupial.world.capabilities import Rotorcraft
 from marsupial.world.onboard import StateEstimate
 
 from .observer import EyeInHandObserver
 from .relative_pose import RelativePose, RelativeState
-from .team import carrier_port
+from .selection import yaw_of_rotation
+from .team import CarrierName, carrier_port
 
 PART_A_LINK = "part_a"
 PART_B_LINK = "part_b"
@@ -163,7 +165,7 @@ def command_hold(uav: Any, state: RelativeState, p_target_M: np.ndarray, yaw_tar
     if state.T_M_Q is None:
         uav.hover()
         return None
-    p_uav_M, yaw_uav_M = state.T_M_Q[:3, 3], state.yaw_M
+    p_uav_M, yaw_uav_M = state.T_M_Q[:3, 3], yaw_of_rotation(state.T_M_Q[:3, :3])
     v_M, yaw_rate = hold_command(p_uav_M, yaw_uav_M, p_target_M, yaw_target_M, frame, gains)
     v_M = v_M - state.drift_M  # the autopilot flies its velocity estimate, biased by the drift rate
     uav.command_velocity(*body_velocity(v_M, yaw_uav_M), yaw_rate, frame="body")
@@ -180,14 +182,15 @@ def relative_pose_of(
     ``vision_fixes``: also send each accepted frame to the UAV's estimator as an external fix.
     """
     observer = EyeInHandObserver.of(skill.context, carrier) if fuse else None
-    return RelativePose(carrier, skill.context.link(carrier.name), skill.robot_name, observer, gain, gate, since, vision_fixes)
+    uav = str(skill.robot_name)  # a UAV skill always has its robot
+    return RelativePose(carrier, skill.context.link(carrier.name), uav, observer, gain, gate, since, vision_fixes)
 
 
-class RelativeHold(Skill):
+class RelativeHold(Skill["RelativeHold.Params"]):
     """Hold the UAV at a pose in the carrier's manipulator frame M (above Part A), on the camera-anchored estimate of P_Q^M."""
 
     class Params(NodeParams):
-        carrier: str = "carrier"
+        carrier: CarrierName = "carrier"
         """Team member carrying the arm (a mobile_manipulator); M is its ``arm_base`` frame."""
         height: float = Field(HOLD_HEIGHT, gt=0.0)
         """Height (m) of Part B above Part A of ``arm_pose`` (0.30 m: within the arm's upward range for contact)."""
@@ -204,7 +207,8 @@ class RelativeHold(Skill):
         seconds: float | None = Field(None, gt=0.0)
         """Succeed after holding this long (simulated s); none: hold until stopped."""
 
-    robot_kinds = ("Quadrotor",)
+    robot_kinds = (Rotorcraft,)
+    claims = ("rotors",)
     writes = ("{robot}/hold_error",)
 
     def start(self) -> None:

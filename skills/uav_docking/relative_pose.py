@@ -232,7 +232,8 @@ class RelativePose:
 
     def send_fix(self, T_N_Q: np.ndarray, stamp: float) -> None:
         """Send the UAV its pose in N measured at ``stamp`` (s) over the team link (once per frame)."""
-        fix = VisionFix(stamp, tuple(float(v) for v in T_N_Q[:3, 3]), yaw_of_rotation(T_N_Q[:3, :3]), f"{self.carrier.name}/eye_in_hand")
+        x, y, z = (float(v) for v in T_N_Q[:3, 3])
+        fix = VisionFix(stamp, (x, y, z), yaw_of_rotation(T_N_Q[:3, :3]), f"{self.carrier.name}/eye_in_hand")
         self.link.send(vision_fix_topic(self.uav), fix)
 
     def update(self, now: float) -> RelativeState:
@@ -243,23 +244,25 @@ class RelativePose:
         if message is not None and message.payload.stamp >= self.since:
             self.uav_history.add(message.payload)
         observation = None if self.observer is None else self.observer.observe(now)
+        pose = None if observation is None else observation.pose  # None: the bundle was not measured in it
         fresh = observation is not None and observation.stamp >= now - MAX_FRAME_AGE_S  # not a frame from before this skill
-        if fresh and observation.seen and observation.stamp > self.fused_stamp:
+        if observation is not None and pose is not None and fresh and observation.stamp > self.fused_stamp:
             self.fused_stamp = observation.stamp
             T_N_M, T_O_Q = self.T_N_M(observation.stamp, odometry=True), pose_at(self.uav_history, observation.stamp)
             if T_N_M is not None and T_O_Q is not None and self.filter.measure(
-                observation.pose.T_M_Q, T_N_M, T_O_Q, observation.stamp
+                pose.T_M_Q, T_N_M, T_O_Q, observation.stamp
             ):
                 self.seen_at = observation.stamp
                 T_map_M = self.T_N_M(observation.stamp, odometry=False)  # the fix is in the frame the UAV's shares
                 if self.vision_fixes and T_map_M is not None:
-                    self.send_fix(T_map_M @ observation.pose.T_M_Q, observation.stamp)
+                    self.send_fix(T_map_M @ pose.T_M_Q, observation.stamp)
         T_N_M, T_O_Q = self.T_N_M(now, odometry=self.filter.measured), pose_at(self.uav_history, now)
         if T_N_M is None or T_O_Q is None:
             return RelativeState(now, seen_at=self.seen_at)
         T_M_Q = self.filter.predict(T_N_M, T_O_Q, now)
         uav = self.uav_history.latest
         carrier = (self.odometry_history if self.filter.measured else self.carrier_history).latest
+        assert uav is not None and carrier is not None, "the poses above came from them"
         drift_N = self.filter.rate_at(now)
         v_uav_N = self.filter.C[:3, :3] @ np.asarray(uav.velocity) + drift_N
         R_N_base = rotation_matrix(carrier.orientation)

@@ -34,10 +34,11 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.trees.skill import NodeParams, Skill
+from marsupial.world.capabilities import Rotorcraft
 
 from .observer import EyeInHandObserver, position_spread
 from .relative_hold import CarrierFrame, HoldGains, command_hold, relative_pose_of, target_above_part_a
-from .team import DOCKING_FLAG, UAV_POSE, carrier_port, phase_event
+from .team import DOCKING_FLAG, UAV_POSE, CarrierName, carrier_port, phase_event
 
 SEARCH_JOINTS = (0, 4)  # arm joints swept by the search: base yaw (joint 1) and wrist pitch (joint 5)
 
@@ -55,11 +56,11 @@ def search_offsets(t: float, yaw_amplitude: float, tilt_amplitude: float, period
     return np.array([yaw_amplitude * math.sin(w * t), tilt_amplitude * math.sin(2.0 * w * t)])
 
 
-class Rendezvous(Skill):
+class Rendezvous(Skill["Rendezvous.Params"]):
     """Fly the UAV to the meeting point over the carrier's arm while the eye-in-hand camera searches for its marker."""
 
     class Params(NodeParams):
-        carrier: str = "carrier"
+        carrier: CarrierName = "carrier"
         """Team member carrying the arm and its eye-in-hand camera (a mobile_manipulator)."""
         meeting_height: float = Field(0.8, gt=0.0)
         """Height (m) of Part B above Part A of ``arm_pose`` at the meeting point (chosen: the bundle in full view)."""
@@ -84,7 +85,8 @@ class Rendezvous(Skill):
         tolerance: float = Field(0.02, gt=0.0)
         """Largest joint error (rad) at which the arm has reached ``arm_pose``."""
 
-    robot_kinds = ("Quadrotor",)
+    robot_kinds = (Rotorcraft,)
+    claims = ("rotors", "{carrier}/arm")
     writes = (f"{{carrier}}/{DOCKING_FLAG}", f"{{carrier}}/{UAV_POSE}")
 
     def start(self) -> None:
@@ -123,7 +125,7 @@ class Rendezvous(Skill):
         observation = self.observer.observe(self.now)
         if observation is not None and observation.stamp != self.last_stamp:
             self.last_stamp = observation.stamp
-            if observation.seen:
+            if observation.pose is not None:  # the bundle was measured (observation.seen)
                 self.write(f"{self.params.carrier}/{UAV_POSE}", observation)
                 if not self.seen:
                     phase_event(self, "marker_seen", tags=list(observation.pose.ids))
@@ -133,6 +135,7 @@ class Rendezvous(Skill):
         self.command_arm()
         recent = self.seen[-self.params.stable_detections :]
         stable = len(recent) >= self.params.stable_detections and position_spread(recent) <= self.params.stable_spread
+        assert state.yaw_M is not None, "command_hold had a pose"
         heading_error = abs(math.remainder(state.yaw_M - self.params.yaw_M, math.tau))
         arrived = distance <= self.params.arrival_tolerance and heading_error <= 0.15
         if stable and arrived:
@@ -156,6 +159,7 @@ class Rendezvous(Skill):
         self.q_hold = None
         q = self.q_ready.copy()
         p = self.params
+        assert self.search_started is not None, "the search began"
         t = self.now - self.search_started
         q[list(SEARCH_JOINTS)] += search_offsets(t, p.search_yaw, p.search_tilt, p.search_period)
         self.carrier.set_joint_targets(q)

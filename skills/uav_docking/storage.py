@@ -30,30 +30,34 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
-from marsupial.trees.skill import NodeParams, Skill
+from typing import Annotated
+
+from marsupial.trees.skill import NodeParams, Skill, TeamMember
+from marsupial.world.capabilities import Carrier, Rotorcraft
 
 from .pose import invert
 from .relative_hold import PART_A_LINK, CarrierFrame, HoldGains, command_hold, part_b_transform, relative_pose_of
-from .relative_pose import RelativeState
+from .relative_pose import RelativePose, RelativeState
 from .selection import rot_z, yaw_of_rotation
-from .team import DOCKING_FLAG, PART_B_YAW, UAV_STORED, carrier_port, phase_event
+from .team import DOCKING_FLAG, PART_B_YAW, UAV_STORED, CarrierName, carrier_port, phase_event
 
 ARM_TOLERANCE = 0.02  # rad: every joint this close to its target counts as arrived
 GRAVITY = 9.81  # m/s², standard gravity (the weight the rotor thrust must hold before the release)
 
 
-class Store(Skill):
+class Store(Skill["Store.Params"]):
     """Carry the UAV locked on Part A to the storage pose (ground sensors clear); it charges while stored."""
 
     class Params(NodeParams):
-        uav: str = "uav"
+        uav: Annotated[str, TeamMember(Rotorcraft)] = "uav"
         """The UAV being stored (named in the ``stored`` event)."""
         arm_pose: str = "storage"
         """Arm pose that stores the UAV (a name of the carrier's arm poses): over the rear deck, sensors clear (§IV-B)."""
         tolerance: float = Field(ARM_TOLERANCE, gt=0.0)
         """Largest joint error (rad) at which the arm has arrived."""
 
-    robot_kinds = ("MobileManipulator",)
+    robot_kinds = (Carrier,)
+    claims = ("arm",)
     writes = (f"{{robot}}/{UAV_STORED}", f"{{robot}}/{DOCKING_FLAG}")
 
     def start(self) -> None:
@@ -80,11 +84,11 @@ class Store(Skill):
             self.robot.hold_arm()
 
 
-class Deploy(Skill):
+class Deploy(Skill["Deploy.Params"]):
     """Raise the stored UAV, start its motors, release it once its thrust holds its weight, climb clear of the arm."""
 
     class Params(NodeParams):
-        carrier: str = "carrier"
+        carrier: CarrierName = "carrier"
         """Team member whose Part A holds the UAV (a mobile_manipulator)."""
         arm_pose: str = "docking_ready"
         """Arm pose the UAV is raised to before take-off (Part A up over the base, clear of the carrier)."""
@@ -99,7 +103,8 @@ class Deploy(Skill):
         tolerance: float = Field(ARM_TOLERANCE, gt=0.0)
         """Largest joint error (rad) at which the arm has arrived."""
 
-    robot_kinds = ("Quadrotor",)
+    robot_kinds = (Rotorcraft,)
+    claims = ("rotors", "{carrier}/arm", "{carrier}/docking")
     reads = (f"{{carrier}}/{PART_B_YAW}",)
     writes = (f"{{carrier}}/{DOCKING_FLAG}", f"{{carrier}}/{UAV_STORED}", f"{{carrier}}/{PART_B_YAW}")
 
@@ -112,7 +117,7 @@ class Deploy(Skill):
         self.yaw_clear_M = 0.0
         self.gains = HoldGains(max_speed=self.params.climb_speed)
         self.T_Q_B = part_b_transform(self.robot)
-        self.relative = None
+        self.relative: RelativePose | None = None  # from the hand-over on
         self.write(f"{self.params.carrier}/{DOCKING_FLAG}", True)
         phase_event(self, "raise")
 
@@ -171,6 +176,7 @@ class Deploy(Skill):
 
     def climb(self) -> Status:
         """Climb to the clearance height above the release point, moving with the carrier (on the estimates)."""
+        assert self.relative is not None, "climb() follows the hand-over"
         state = self.relative.update(self.now)
         if state.T_M_Q is None:  # no telemetry since the hand-over yet: the UAV is where it was released
             state = RelativeState(self.now, self.T_M_Q_release)

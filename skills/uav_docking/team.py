@@ -26,14 +26,18 @@ Blackboard keys written by the family, under the carrier's name
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 from marsupial.trees.arbitration import CommandPort
+from marsupial.trees.skill import TeamMember
+from marsupial.world.capabilities import Carrier
 from marsupial.world.errors import UnknownNameError
-from marsupial.world.onboard import CarrierOnboard
 
 if TYPE_CHECKING:
-    from marsupial.trees.skill import Skill
+    from marsupial.trees.skill import MissionNode
+
+#: a parameter naming the carrier a skill works with (checked by the compiler: a team member that is a Carrier)
+CarrierName = Annotated[str, TeamMember(Carrier)]
 
 DOCKING_FLAG = "docking"
 UAV_POSE = "uav_pose_M"
@@ -41,21 +45,20 @@ UAV_STORED = "uav_stored"
 PART_B_YAW = "part_b_yaw"
 
 
-def carrier_port(skill: Skill, name: str) -> CommandPort:
+def carrier_port(skill: MissionNode[Any], name: str) -> CommandPort:
     """The onboard interface of team member ``name`` as ``skill`` commands it (through the run's arbiter).
 
-    It must be a carrier: an arm with its kinematics and a docking device
-    (:class:`~marsupial.world.onboard.CarrierOnboard`, the
-    ``mobile_manipulator``). Raises :class:`UnknownNameError` naming the
+    It must be a :class:`~marsupial.world.capabilities.Carrier`: an arm with
+    its kinematics and a docking device (the ``mobile_manipulator``). Raises :class:`UnknownNameError` naming the
     team's carriers when ``name`` is not one of them.
     """
     context = skill.context
-    carriers = [n for n in context.team() if isinstance(context.onboard(n), CarrierOnboard)]
+    carriers = [n for n in context.team() if skill.member(n).provides(Carrier)]
     if name not in carriers:
         raise UnknownNameError(f"carrier of {skill.name} (a mobile_manipulator)", name, carriers)
     return skill.member(name)
 
 
-def phase_event(skill: Skill, phase: str, **fields: Any) -> None:
+def phase_event(skill: MissionNode[Any], phase: str, **fields: Any) -> None:
     """Record that ``skill`` entered ``phase`` (a ``state_change`` event with the node, skill, robot and ``fields``)."""
     skill.context.event("state_change", node=skill.name, skill=skill.kind, robot=skill.robot_name, phase=phase, **fields)

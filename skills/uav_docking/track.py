@@ -61,13 +61,14 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.trees.skill import NodeParams, Skill
+from marsupial.world.capabilities import Rotorcraft
 
 from .engine import MotionEngine, MotionEngineParams
 from .pose import invert
 from .relative_hold import PART_A_LINK, CarrierFrame, HoldGains, command_hold, part_b_offset, relative_pose_of
 from .relative_pose import RelativeState
 from .selection import PbvsTarget, SelectionParams, rot_z, yaw_of_rotation
-from .team import DOCKING_FLAG, carrier_port, phase_event
+from .team import DOCKING_FLAG, CarrierName, carrier_port, phase_event
 from .vicinity import VicinityParams
 from .zones import ZoneMap, carrier_zones
 
@@ -141,11 +142,11 @@ def sonar_cone_zones(zones: ZoneMap, T_M_S: np.ndarray, half_angle: float, lengt
         zones.add_cylinder(f"{name}_{k}", centre, radius, slice_length / 2.0, R)
 
 
-class Track(Skill):
+class Track(Skill["Track.Params"]):
     """Track the UAV with the arm's Motion Engine from the eye-in-hand camera while the UAV holds its pose in M."""
 
     class Params(NodeParams):
-        carrier: str = "carrier"
+        carrier: CarrierName = "carrier"
         """Team member carrying the arm and its eye-in-hand camera (a mobile_manipulator)."""
         standoff: float = Field(0.40, ge=0.2, le=1.2)
         """Camera-to-tag-plate distance (m) of the tracking target P_VS (chosen: the bundle fills the view, all tags found at 320×240)."""
@@ -182,13 +183,14 @@ class Track(Skill):
         f_B: float = Field(4.0, gt=0.0)
         """Planning-and-optimisation rate f_B (Hz), §IV-A; merge and selection run at f_O = 2·f_B."""
 
-    robot_kinds = ("Quadrotor",)
+    robot_kinds = (Rotorcraft,)
+    claims = ("rotors", "{carrier}/arm")
     writes = (f"{{carrier}}/{TRACKING}", f"{{carrier}}/{DOCKING_FLAG}")
 
     @classmethod
-    def read_keys(cls, params: NodeParams, robot: str | None) -> tuple[str, ...]:
+    def read_keys(cls, params: Track.Params, robot: str | None) -> tuple[str, ...]:
         """The contact target, when the skill follows a contact phase."""
-        return (f"{params.carrier}/{CONTACT_TARGET}",) if params.contact else ()  # type: ignore[attr-defined]
+        return (f"{params.carrier}/{CONTACT_TARGET}",) if params.contact else ()
 
     # ------------------------------------------------------------ life cycle
     def start(self) -> None:
@@ -253,8 +255,8 @@ class Track(Skill):
         self._hold_uav(relative)
         self.write(f"{p.carrier}/{TRACKING}", state)
         what = "contact" if self.contact is not None else "tracking"
-        seen = "seen" if state.seen else f"unseen for {state.age():.1f} s"
-        self.feedback_message = f"{what}: marker {seen}, UAV {state.hold_error:.3f} m from its hold pose"
+        marker = "seen" if state.seen else f"unseen for {state.age():.1f} s"
+        self.feedback_message = f"{what}: marker {marker}, UAV {state.hold_error:.3f} m from its hold pose"
         return Status.RUNNING
 
     def finish(self, status: Status) -> None:
@@ -303,14 +305,16 @@ class Track(Skill):
         return zones
 
     def _state(self, now: float, q: np.ndarray, seen: bool, seen_at: float) -> TrackingState:
-        """The tracking state from the last UAV pose and the arm's forward kinematics."""
+        """The tracking state from the last UAV pose (set) and the arm's forward kinematics."""
+        T_M_Q = self.T_M_Q
+        assert T_M_Q is not None, "called once a frame anchored the UAV pose"
         T_M_A = self.kinematics.transform(q, PART_A_LINK)
-        p_B_A = (invert(T_M_A) @ self.T_M_Q @ self.T_Q_B)[:3, 3]
+        p_B_A = (invert(T_M_A) @ T_M_Q @ self.T_Q_B)[:3, 3]
         T_M_C = self.kinematics.transform(q, CAMERA_FRAME)
-        p_aim_C = (invert(T_M_C) @ self.T_M_Q @ np.append(PbvsTarget().aim_Q, 1.0))[:3]
-        hold_error = float(np.linalg.norm(self.T_M_Q[:3, 3] - self.p_hold_M))
+        p_aim_C = (invert(T_M_C) @ T_M_Q @ np.append(PbvsTarget().aim_Q, 1.0))[:3]
+        hold_error = float(np.linalg.norm(T_M_Q[:3, 3] - self.p_hold_M))
         offset = float(math.hypot(p_aim_C[0], p_aim_C[1]))
-        return TrackingState(now, self.started, seen, seen_at, self.T_M_Q, p_B_A, hold_error, offset)
+        return TrackingState(now, self.started, seen, seen_at, T_M_Q, p_B_A, hold_error, offset)
 
     def _hold_uav(self, relative: RelativeState) -> None:
         """Relative hold of the UAV at its pose in M on the estimate (the estimates alone before any frame)."""
@@ -318,12 +322,13 @@ class Track(Skill):
 
     def _log(self, q: np.ndarray, state: TrackingState) -> None:
         """Metrics of Fig. 20: Part A and (when measured) Part B in M, the camera's centring, the gap."""
-        robot = self.robot_name
+        robot, T_M_Q = self.robot_name, state.T_M_Q
+        assert T_M_Q is not None and state.p_B_A is not None, "logged for a state with a UAV pose"
         p_A_M = self.kinematics.forward(q, PART_A_LINK)[0]
-        p_B_M = (self.T_M_Q @ self.T_Q_B)[:3, 3]
+        p_B_M = (T_M_Q @ self.T_Q_B)[:3, 3]
         for k, axis in enumerate("xyz"):
             self.context.metric("part_a_M", float(p_A_M[k]), robot=robot, axis=axis)
-            self.context.metric("uav_M_estimate", float(self.T_M_Q[k, 3]), robot=robot, axis=axis)
+            self.context.metric("uav_M_estimate", float(T_M_Q[k, 3]), robot=robot, axis=axis)
             if state.seen:
                 self.context.metric("part_b_M", float(p_B_M[k]), robot=robot, axis=axis)
         if state.seen:

@@ -238,7 +238,8 @@ class ZoneMap:
     def _candidates(self, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(query, zone) index pairs whose boxes overlap: every query box against every zone box at once."""
         overlap = np.all((lower[:, None] <= self._upper[None]) & (upper[:, None] >= self._lower[None]), axis=2)
-        return np.nonzero(overlap)
+        query, zone = np.nonzero(overlap)
+        return query, zone
 
     def points_free(self, points: np.ndarray, clearance: float = 0.0) -> np.ndarray:
         """Boolean mask of the ``(n, 3)`` points (m) at least ``clearance`` from every zone and inside the bounds."""

@@ -39,7 +39,7 @@ class Mission:
     path: Path | None
     source: SourceDoc
     overrides: dict[str, str] = field(default_factory=dict)
-    references: dict[tuple, str] = field(default_factory=dict, repr=False)  # (file, include note, key path) -> note
+    references: dict[tuple[Any, ...], str] = field(default_factory=dict, repr=False)  # (file, include note, key path) -> note
     #: texts of the subtree files inlined, by their path relative to the mission's folder (see :func:`subtree_key`)
     subtree_texts: dict[str, str] = field(default_factory=dict, repr=False)
 
@@ -48,12 +48,12 @@ class Mission:
         """The mission's name (its ``mission:`` key)."""
         return self.spec.mission
 
-    def _place(self, where: KeyPathLike | NodeBase | Guard | PriorityEntry) -> tuple[SourceDoc, tuple, str | None]:
+    def _place(self, where: KeyPathLike | NodeBase | Guard | PriorityEntry) -> tuple[SourceDoc, tuple[Any, ...], str | None]:
         """(source document, key path, include note) of a key path or node."""
         key_path = getattr(where, "key_path", where)
         return getattr(key_path, "source", None) or self.source, tuple(key_path), getattr(key_path, "note", None)
 
-    def reference_notes(self, source: SourceDoc, note: str | None) -> dict[tuple, str]:
+    def reference_notes(self, source: SourceDoc, note: str | None) -> dict[tuple[Any, ...], str]:
         """Key path -> where its ``${name}`` values were set, for the strings of ``source`` reached via ``note``."""
         return {path: text for (file, via, path), text in self.references.items() if (file, via) == (source.file, note)}
 
@@ -99,7 +99,7 @@ def _param_origins(source: SourceDoc, params: Mapping[str, Any], overrides: Mapp
     return {name: set_by.get(name) or f"set at {source.where(('params', name))}" for name in params}
 
 
-def _has(container: dict | list, item: Any) -> bool:
+def _has(container: dict[str, Any] | list[Any], item: Any) -> bool:
     if isinstance(container, dict):
         return item in container
     return isinstance(item, int) and -len(container) <= item < len(container)
@@ -187,7 +187,8 @@ def load_mission(name_or_path: str | Path, overrides: Mapping[str, str] | None =
 
 def _robot_refs(node: NodeBase) -> Iterator[tuple[KeyPath, str]]:
     """(key path of the ``robot`` key, robot name) of a node and its guards."""
-    for holder in [node, *node.guards()]:
+    holders: list[Any] = [node, *node.guards()]
+    for holder in holders:
         robot = getattr(holder, "robot", None)
         if robot is not None:
             yield holder.key_path + ("robot",), robot

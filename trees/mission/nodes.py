@@ -8,7 +8,7 @@ also knows its source document), so later stages report problems there.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping
-from typing import Annotated, Any, ClassVar, Literal, TypeAlias, Union, get_args
+from typing import Annotated, Any, ClassVar, Literal, TypeAlias, Union, cast, get_args
 
 from pydantic import (
     AfterValidator,
@@ -28,7 +28,7 @@ from ..errors import KeyPathLike, suggest
 from ..yaml_source import SourceDoc
 
 
-class KeyPath(tuple):
+class KeyPath(tuple[Any, ...]):
     """A key path (keys and list indices) that also remembers the document it points into.
 
     ``source`` is the :class:`SourceDoc` (the mission, or a subtree file for
@@ -39,7 +39,7 @@ class KeyPath(tuple):
     source: SourceDoc | None
     note: str | None
 
-    def __new__(cls, items: KeyPathLike = (), source: SourceDoc | None = None, note: str | None = None):
+    def __new__(cls, items: KeyPathLike = (), source: SourceDoc | None = None, note: str | None = None) -> KeyPath:
         self = super().__new__(cls, tuple(items))
         self.source = source
         self.note = note
@@ -104,14 +104,19 @@ class NodeBase(BaseModel):
         target = getattr(self, self.kind)
         return f"{self.kind} {target}" if isinstance(target, str) else self.kind
 
-    def map_children(self, fn: Callable[[Node, tuple], Node]) -> None:
+    def map_children(self, fn: Callable[[Node, tuple[Any, ...]], Node]) -> None:
         """Replace each child ``c`` (at relative key path ``rel``) with ``fn(c, rel)``; leaves have none."""
 
     @property
     def children(self) -> list[Node]:
         """The child nodes, in order."""
         found: list[Node] = []
-        self.map_children(lambda child, _: found.append(child) or child)
+
+        def keep(child: Node, _: tuple[Any, ...]) -> Node:
+            found.append(child)
+            return child
+
+        self.map_children(keep)
         return found
 
     def guards(self) -> list[Guard]:
@@ -120,7 +125,7 @@ class NodeBase(BaseModel):
 
     def walk(self) -> Iterator[Node]:
         """This node and all its descendants, depth first."""
-        yield self
+        yield cast("Node", self)
         for child in self.children:
             yield from child.walk()
 
@@ -133,7 +138,7 @@ class NodeBase(BaseModel):
 class _Composite(NodeBase):
     """A node whose structural key holds a list of child nodes."""
 
-    def map_children(self, fn: Callable[[Node, tuple], Node]) -> None:
+    def map_children(self, fn: Callable[[Node, tuple[Any, ...]], Node]) -> None:
         children = getattr(self, self.kind)
         setattr(self, self.kind, [fn(child, (self.kind, i)) for i, child in enumerate(children)])
 
@@ -141,7 +146,7 @@ class _Composite(NodeBase):
 class _Decorator(NodeBase):
     """A node whose structural key holds its one child node."""
 
-    def map_children(self, fn: Callable[[Node, tuple], Node]) -> None:
+    def map_children(self, fn: Callable[[Node, tuple[Any, ...]], Node]) -> None:
         setattr(self, self.kind, fn(getattr(self, self.kind), (self.kind,)))
 
 
@@ -199,12 +204,12 @@ class Guard(BaseModel):
     @property
     def condition(self) -> str:
         """Name of the condition (the guard's one non-``robot``/``params`` key)."""
-        return str(next(iter(self.model_extra)))
+        return str(next(iter(self.model_extra or {})))
 
     @property
     def argument(self) -> Any:
         """The condition's primary argument (the value of the condition key)."""
-        return next(iter(self.model_extra.values()))
+        return next(iter((self.model_extra or {}).values()))
 
     @property
     def key_path(self) -> KeyPath:
@@ -216,7 +221,7 @@ class _OneOrList:
     """JSON Schema of a list field that also accepts a single item (``when: {…}`` or ``when: [{…}, …]``)."""
 
     @classmethod
-    def __get_pydantic_json_schema__(cls, core_schema: Any, handler: Callable[[Any], dict]) -> dict:
+    def __get_pydantic_json_schema__(cls, core_schema: Any, handler: Callable[[Any], dict[str, Any]]) -> dict[str, Any]:
         as_list = handler(core_schema)
         return {"anyOf": [as_list["items"], as_list]}
 
@@ -265,7 +270,7 @@ class PrioritiesNode(NodeBase):
                 )
         return self
 
-    def map_children(self, fn: Callable[[Node, tuple], Node]) -> None:
+    def map_children(self, fn: Callable[[Node, tuple[Any, ...]], Node]) -> None:
         for i, entry in enumerate(self.priorities):
             entry.do = fn(entry.do, ("priorities", i, "do"))
 
@@ -440,5 +445,6 @@ Node: TypeAlias = Annotated[
 #: node-type key -> node model, in the union's order
 NODE_CLASSES: dict[str, type[NodeBase]] = {get_args(member)[0].kind: get_args(member)[0] for member in get_args(get_args(Node)[0])}
 
-for _cls in (*NODE_CLASSES.values(), PriorityEntry):
+_MODELS: tuple[type[BaseModel], ...] = (*NODE_CLASSES.values(), PriorityEntry)
+for _cls in _MODELS:
     _cls.model_rebuild()

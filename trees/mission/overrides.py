@@ -20,7 +20,7 @@ from .validation import unwrap, walk_location
 _SECTIONS = {name: f.annotation for name, f in MissionSpec.model_fields.items()}
 
 
-def _override_keys(data: Any, tp: Any) -> list:
+def _override_keys(data: Any, tp: Any) -> list[Any]:
     """Keys an override may set in ``data`` (declared type ``tp``): model fields, else existing keys."""
     tp = unwrap(tp)
     if isinstance(tp, type) and issubclass(tp, BaseModel):
@@ -37,7 +37,7 @@ def _is_mapping_type(tp: Any) -> bool:
     return get_origin(tp) is dict or (isinstance(tp, type) and issubclass(tp, BaseModel))
 
 
-def apply_overrides(data: dict, overrides: Mapping[str, str], file: str | None = None) -> dict[tuple, str]:
+def apply_overrides(data: dict[str, Any], overrides: Mapping[str, str], file: str | None = None) -> dict[tuple[Any, ...], str]:
     """Set ``--set key=value`` overrides in mission ``data`` (in place); values are parsed as YAML.
 
     A key is a dotted path (``params.cruise_height``, ``world.seed``,
@@ -47,8 +47,9 @@ def apply_overrides(data: dict, overrides: Mapping[str, str], file: str | None =
     override (to annotate later validation errors). An unknown key raises a
     :class:`MissionError` listing the close names.
     """
-    applied: dict[tuple, str] = {}
-    params = data.get("params") if isinstance(data.get("params"), dict) else {}
+    applied: dict[tuple[Any, ...], str] = {}
+    given = data.get("params")
+    params: dict[str, Any] = given if isinstance(given, dict) else {}
     for key, text in overrides.items():
         shown = f"--set {key}={text}"
         parts: list[Any] = key.split(".") if "." in key else ["params", key]
@@ -67,7 +68,8 @@ def apply_overrides(data: dict, overrides: Mapping[str, str], file: str | None =
                 expected=f"a mission parameter ({one_of(params)}) or a dotted key such as world.seed",
                 suggestion=suggest(key, list(params) + names),
             )
-        target, tp = data, MissionSpec
+        target: Any = data
+        tp: Any = MissionSpec
         for depth, part in enumerate(parts):
             if isinstance(target, list) and part.lstrip("-").isdigit():
                 part = parts[depth] = int(part)

@@ -90,7 +90,7 @@ def _describe(tp: Any) -> str:
 class _LocWalk:
     """A pydantic error location mapped back onto the YAML document."""
 
-    path: tuple  # key path as written in the YAML (union tags dropped)
+    path: tuple[Any, ...]  # key path as written in the YAML (union tags dropped)
     model: type[BaseModel] | None  # the model that holds the last key
     annotation: Any  # declared type at the path
     value: Any  # the YAML value at the path (None if absent)
@@ -99,8 +99,8 @@ class _LocWalk:
 _ABSENT = object()
 
 
-def walk_location(loc: tuple, root: Any, data: Any) -> _LocWalk:
-    path: list = []
+def walk_location(loc: tuple[Any, ...], root: Any, data: Any) -> _LocWalk:
+    path: list[Any] = []
     tp, value, model = root, data, None
     for item in loc:
         tags = _tag_map(tp)
@@ -128,7 +128,7 @@ def walk_location(loc: tuple, root: Any, data: Any) -> _LocWalk:
     return _LocWalk(tuple(path), model, tp, None if value is _ABSENT else value)
 
 
-def _node_error(walk: _LocWalk) -> tuple[tuple, str, str, str | None]:
+def _node_error(walk: _LocWalk) -> tuple[tuple[Any, ...], str, str, str | None]:
     """(key path, message, expected, suggestion) for a mapping whose node type cannot be told."""
     value, kinds = walk.value, one_of(NODE_KINDS)
     if not isinstance(value, Mapping):
@@ -153,7 +153,7 @@ def _show(value: Any) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def _convert(err: Mapping[str, Any], root: Any, data: Any) -> tuple[tuple, str, str | None, str | None]:
+def _convert(err: Mapping[str, Any], root: Any, data: Any) -> tuple[tuple[Any, ...], str, str | None, str | None]:
     """(key path, message, expected, suggestion) of one pydantic error."""
     walk = walk_location(tuple(err["loc"]), root, data)
     kind, ctx = err["type"], err.get("ctx") or {}
@@ -179,7 +179,7 @@ def validation_errors(
     base_path: KeyPathLike = (),
     root: Any = None,
     data: Any = None,
-    notes: Mapping[tuple, str] | None = None,
+    notes: Mapping[tuple[Any, ...], str] | None = None,
     note: str | None = None,
 ) -> list[MissionError]:
     """A :class:`MissionError` for each error of a pydantic ``ValidationError``.
@@ -207,7 +207,7 @@ def errors_from_validation(
     base_path: KeyPathLike = (),
     root: Any = None,
     data: Any = None,
-    notes: Mapping[tuple, str] | None = None,
+    notes: Mapping[tuple[Any, ...], str] | None = None,
     note: str | None = None,
 ) -> MissionError:
     """:func:`validation_errors` as one :class:`MissionError` (a :class:`MissionErrors` if several)."""
@@ -215,7 +215,7 @@ def errors_from_validation(
 
 
 @functools.cache
-def _adapter(model: Any) -> TypeAdapter:
+def _adapter(model: Any) -> TypeAdapter[Any]:
     return TypeAdapter(model)
 
 
@@ -225,7 +225,7 @@ def validate_source(
     source: SourceDoc,
     base_path: KeyPathLike = (),
     pending: Sequence[MissionError] = (),
-    notes: Mapping[tuple, str] | None = None,
+    notes: Mapping[tuple[Any, ...], str] | None = None,
     note: str | None = None,
 ) -> Any:
     """``data`` (found at ``base_path`` of ``source``) validated against ``model`` (a type).

@@ -3,8 +3,12 @@
 from __future__ import annotations
 
 import importlib
+from typing import TYPE_CHECKING, cast
 
 from ..errors import UnknownNameError
+
+if TYPE_CHECKING:
+    from .base import Robot
 
 # kind -> "module:Class" (modules import lazily: a run loads only what it uses)
 ROBOT_KINDS: dict[str, str] = {
@@ -19,11 +23,11 @@ ROBOT_KINDS: dict[str, str] = {
 }
 
 
-def robot_class(kind: str) -> type:
+def robot_class(kind: str) -> type[Robot]:
     """The Python class implementing robot ``kind``; the error lists the known kinds."""
     try:
         target = ROBOT_KINDS[kind]
     except KeyError:
         raise UnknownNameError("robot", kind, ROBOT_KINDS) from None
     module, _, cls = target.partition(":")
-    return getattr(importlib.import_module(module, __name__), cls)
+    return cast("type[Robot]", getattr(importlib.import_module(module, __name__), cls))

@@ -16,6 +16,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pybullet
 
+from marsupial.geometry import Vector
+
 if TYPE_CHECKING:
     from ..world import World
 
@@ -47,7 +49,7 @@ class ArmController:
         joint_indices: Sequence[int],
         limits: Sequence[tuple[float, float]],
         max_speed: float = 15.0 * RPM,
-        max_torque: float | Sequence[float] = 60.0,
+        max_torque: float | Vector = 60.0,
         gains: JointPID = JointPID(),
     ):
         self.cid = world.client_id
@@ -73,7 +75,7 @@ class ArmController:
         states = pybullet.getJointStates(self.body_id, self.joints, physicsClientId=self.cid)
         return np.array([s[1] for s in states])
 
-    def set_targets(self, q: Sequence[float]) -> None:
+    def set_targets(self, q: Vector) -> None:
         """New joint position targets (rad), clipped into the joint ranges."""
         q = np.asarray(q, dtype=float)
         if q.shape != self.lower.shape:
@@ -85,7 +87,7 @@ class ArmController:
         self.targets = self.positions()
         self._integral[:] = 0.0
 
-    def reset(self, q: Sequence[float]) -> None:
+    def reset(self, q: Vector) -> None:
         """Teleport the joints to ``q`` (rad) at rest and hold there (for setting up scenes)."""
         for j, angle in zip(self.joints, q, strict=True):
             pybullet.resetJointState(self.body_id, j, float(angle), 0.0, physicsClientId=self.cid)

@@ -12,6 +12,8 @@ from typing import TYPE_CHECKING, Any
 
 import pybullet
 
+from marsupial.geometry import Vector
+
 if TYPE_CHECKING:
     from .base import Robot
 
@@ -47,7 +49,7 @@ def set_collisions(
             pybullet.setCollisionFilterPair(body_a, body_b, link_a, link_b, int(enabled), physicsClientId=cid)
 
 
-def place_link_at(robot: Robot, link: str, position: Sequence[float], orientation: Sequence[float]) -> None:
+def place_link_at(robot: Robot, link: str, position: Vector, orientation: Vector) -> None:
     """Teleport ``robot`` at rest so that its ``link`` frame lands on the given world pose (m, [x, y, z, w]).
 
     Scene set-up only (a robot that starts the run stored): its onboard

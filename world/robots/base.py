@@ -8,14 +8,13 @@ quaternions ``[x, y, z, w]``); velocities in the world frame (m/s, rad/s).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pybullet
 
 from ..assets import asset_path
-from marsupial.geometry import yaw_of  # (also re-exported for the robot modules)
+from marsupial.geometry import Vector, yaw_of  # (yaw_of is also re-exported for the robot modules)
 
 from ..errors import UnknownNameError
 from ..onboard import Onboard, base_frame_offset
@@ -26,7 +25,7 @@ if TYPE_CHECKING:
     from ..world import World
 
 
-def pose_from_list(pose: Sequence[float], default_z: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+def pose_from_list(pose: Vector, default_z: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """Turn a mission pose into ``(position, quaternion)`` in the world frame.
 
     Accepted: ``[x, y]``, ``[x, y, yaw]`` (ground robots, z = ``default_z``)
@@ -44,7 +43,7 @@ def pose_from_list(pose: Sequence[float], default_z: float = 0.0) -> tuple[np.nd
     return np.array([x, y, z]), np.array([0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)])
 
 
-def rotation_matrix(quaternion: Sequence[float]) -> np.ndarray:
+def rotation_matrix(quaternion: Vector) -> np.ndarray:
     """3×3 rotation matrix of an ``[x, y, z, w]`` quaternion."""
     return np.array(pybullet.getMatrixFromQuaternion(quaternion)).reshape(3, 3)
 
@@ -64,6 +63,8 @@ class Robot:
     onboard_class: type[Onboard] = Onboard
     #: the onboard state estimator (set by each kind's constructor, :mod:`marsupial.world.estimation`)
     estimator: Estimator
+    #: its onboard interface once built (:func:`~marsupial.world.onboard.onboard_of`)
+    _onboard: Onboard | None = None
 
     def __init__(self, world: World, name: str):
         self.world = world
@@ -78,8 +79,8 @@ class Robot:
     def load_urdf(
         self,
         filename: str,
-        position: Sequence[float],
-        orientation: Sequence[float] = (0.0, 0.0, 0.0, 1.0),
+        position: Vector,
+        orientation: Vector = (0.0, 0.0, 0.0, 1.0),
         fixed_base: bool = False,
     ) -> int:
         """Load ``world/assets/<filename>`` as this robot's body; fill :attr:`links`."""
@@ -197,6 +198,11 @@ class Robot:
 
     def post_physics(self, dt: float) -> None:
         """Update internal state after each physics step (batteries, estimates)."""
+
+    @classmethod
+    def declared_sensors(cls) -> frozenset[str] | None:
+        """Short names of the sensors every robot of this kind has (``None``: not declared, not checked)."""
+        return None
 
     def safe_stop(self) -> None:
         """Leave the robot safe: hover in place, stop the wheels, hold the arm."""

@@ -41,12 +41,14 @@ fixed constraint each costs the solver tens of microseconds per step.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pybullet
+
+from marsupial.geometry import Vector
 
 from ..assets import asset_path
 from ..errors import UnknownNameError
@@ -56,7 +58,7 @@ from .arm import ArmController
 from .attachment import set_collisions, weld
 from .base import Robot, yaw_of
 from ..estimation.ground import SKID_STEER_ODOMETRY
-from ..onboard import simulates_hardware
+from ..onboard import ManipulatorOnboard, simulates_hardware
 from .diff_drive import DiffDriveLimits
 from .encoders import JointEncoders
 from .wheeled import WheeledRobot
@@ -86,7 +88,7 @@ ARM_READY = (0.0, -0.3, 2.2, 0.0, 1.2, 0.0)
 
 
 def _point_velocity(
-    v: Sequence[float], w: Sequence[float], c: Sequence[float], p: Sequence[float]
+    v: Vector, w: Vector, c: Vector, p: Vector
 ) -> tuple[float, float, float]:
     """Velocity (m/s) of point ``p`` of a rigid body whose point ``c`` moves at ``v`` and which turns at ``w``."""
     rx, ry, rz = p[0] - c[0], p[1] - c[1], p[2] - c[2]
@@ -113,7 +115,7 @@ class LaunchingApparatus:
         mav: the MAV it carries (``None`` when empty).
     """
 
-    def __init__(self, world: World, name: str, position: Sequence[float], orientation: Sequence[float]):
+    def __init__(self, world: World, name: str, position: Vector, orientation: Vector):
         self.world = world
         self.name = name
         self.cid = world.client_id
@@ -182,7 +184,7 @@ class LaunchingApparatus:
             self._mav_weld = weld(self.body_id, self.links["cradle"], self.mav.body_id, -1, WELD_FORCE_N, self.cid)
 
     def follow(
-        self, p_base: Sequence[float], q_base: Sequence[float], v_base: Sequence[float], w_base: Sequence[float]
+        self, p_base: Vector, q_base: Vector, v_base: Vector, w_base: Vector
     ) -> None:
         """Move a latched apparatus and its secured MAV rigidly with the carrier's base.
 
@@ -280,6 +282,7 @@ class MMS(WheeledRobot):
     """
 
     kind = "mms"
+    onboard_class = ManipulatorOnboard
     urdf = "mms.urdf"
     default_limits = MMS_LIMITS
 
@@ -289,11 +292,11 @@ class MMS(WheeledRobot):
         self,
         world: World,
         name: str,
-        pose: Sequence[float] = (0.0, 0.0, 0.0),
+        pose: Vector = (0.0, 0.0, 0.0),
         limits: DiffDriveLimits | Mapping[str, float] | None = None,
         localization: str = "odometry",
         mavs: bool = True,
-        arm_q: Sequence[float] = ARM_READY,
+        arm_q: Vector = ARM_READY,
         camera: Mapping[str, Any] | None = None,
     ):
         super().__init__(world, name, pose=pose, limits=limits, localization=localization)
@@ -350,7 +353,7 @@ class MMS(WheeledRobot):
         )
 
     # ----------------------------------------------------------------- arm
-    def set_joint_targets(self, q: Sequence[float]) -> None:
+    def set_joint_targets(self, q: Vector) -> None:
         """Move the arm toward joint angles ``q`` (6 values, rad; clipped into the joint limits)."""
         self.arm.set_targets(q)
 
@@ -387,6 +390,7 @@ class MMS(WheeledRobot):
         """Close both fingers with :data:`FINGER_FORCE_N` each; they stop on whatever is between them."""
         self._command_fingers(0.0)
 
+    @simulates_hardware
     def gripper_opening(self) -> float:
         """Gap between the finger pads (m)."""
         states = pybullet.getJointStates(self.body_id, self.fingers, physicsClientId=self.cid)

@@ -29,11 +29,13 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pybullet
+
+from marsupial.geometry import Vector
 
 from ..errors import UnknownNameError
 from ..kinematics import ArmKinematics
@@ -171,6 +173,11 @@ class MobileManipulator(WheeledRobot):
 
     kind = "mobile_manipulator"
     onboard_class = CarrierOnboard
+
+    @classmethod
+    def declared_sensors(cls) -> frozenset[str] | None:
+        """The eye-in-hand camera, the front RGB-D camera and the LiDAR."""
+        return frozenset(SENSOR_LINKS)
     urdf = "mobile_manipulator.urdf"
     default_limits = MOBILE_MANIPULATOR_LIMITS
     payload_kg = PAYLOAD_KG
@@ -179,10 +186,10 @@ class MobileManipulator(WheeledRobot):
         self,
         world: World,
         name: str,
-        pose: Sequence[float] = (0.0, 0.0, 0.0),
+        pose: Vector = (0.0, 0.0, 0.0),
         limits: DiffDriveLimits | Mapping[str, float] | None = None,
         localization: str = "odometry",
-        arm_pose: str | Sequence[float] = "stowed",
+        arm_pose: str | Vector = "stowed",
         sensors: Mapping[str, Mapping[str, Any]] | None = None,
         docking: Mapping[str, Any] | None = None,
     ):
@@ -244,7 +251,7 @@ class MobileManipulator(WheeledRobot):
             raise UnknownNameError("arm pose", name, ARM_POSES) from None
 
     @classmethod
-    def _configuration(cls, q: str | Sequence[float]) -> np.ndarray:
+    def _configuration(cls, q: str | Vector) -> np.ndarray:
         if isinstance(q, str):
             return cls.arm_pose(q)
         q = np.asarray(q, dtype=float)
@@ -259,7 +266,7 @@ class MobileManipulator(WheeledRobot):
         """Lower and upper joint limits (rad), :data:`ARM_JOINTS` order."""
         return self.lower.copy(), self.upper.copy()
 
-    def set_joint_targets(self, q: str | Sequence[float]) -> None:
+    def set_joint_targets(self, q: str | Vector) -> None:
         """Move the arm toward ``q`` (6 angles in rad, or a name of :data:`ARM_POSES`), clipped to the limits."""
         self.arm.set_targets(self._configuration(q))
 
@@ -268,7 +275,7 @@ class MobileManipulator(WheeledRobot):
         """Hold every arm joint where it is now."""
         self.arm.hold()
 
-    def reset_arm(self, q: str | Sequence[float]) -> None:
+    def reset_arm(self, q: str | Vector) -> None:
         """Teleport the arm to ``q`` (angles or pose name) at rest and hold it there (scene set-up only)."""
         self.arm.reset(np.clip(self._configuration(q), self.lower, self.upper))
 

@@ -54,7 +54,7 @@ import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import pybullet
@@ -68,7 +68,7 @@ from ..sensors.barometer import Barometer
 from ..sensors.base import SensorConfig
 from ..sensors.camera import OPTICAL_DOWN, OPTICAL_FORWARD, Camera, Intrinsics
 from ..sensors.flow import OpticalFlow
-from ..sensors.imu import Imu, ImuErrors
+from ..sensors.imu import Imu, ImuErrors, Quat, Vec3
 from ..sensors.sonar import Sonar
 from ..world import GRAVITY
 from .autopilot import FRAMES, Autopilot, AutopilotGains, Drag, FlightLimits
@@ -279,6 +279,12 @@ class Quadrotor(Robot):
     onboard_class = QuadrotorOnboard
     estimator: FlightEstimator
 
+    @classmethod
+    def declared_sensors(cls) -> frozenset[str] | None:
+        """The kind's sensors (its spec's, cameras included); ``None`` on the generic class without a spec."""
+        spec = getattr(cls, "spec", None)
+        return None if spec is None else frozenset(spec.sensors)
+
     def __init__(
         self,
         world: World,
@@ -317,7 +323,8 @@ class Quadrotor(Robot):
         self._motors = False
         self.thrust = 0.0  # N, last applied
         self.power = 0.0  # W, last drawn
-        self._v_sample, self._v_sample_step = (0.0, 0.0, 0.0), 0
+        self._v_sample: tuple[float, ...] = (0.0, 0.0, 0.0)
+        self._v_sample_step = 0
         self._state_step = -1  # physics step of the cached base state
         self._power_model = spec.power
         self.autopilot = Autopilot(spec.limits, spec.gains, spec.drag, self.mass, inertia)
@@ -467,10 +474,10 @@ class Quadrotor(Robot):
             self._state_step = self._clock.steps
         return self._state
 
-    def inertial_truth(self) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, float, float]]:
+    def inertial_truth(self) -> tuple[Quat, Vec3, Vec3]:
         """True orientation, world angular velocity and acceleration as tuples (the IMU's input; world side)."""
         _, q, v, w = self.base_state()
-        return q, w, self._acceleration(v)
+        return cast(Quat, q), cast(Vec3, w), self._acceleration(v)
 
     def hover_endurance_s(self) -> float:
         """Seconds of still hover the power model predicts from the present state of charge."""

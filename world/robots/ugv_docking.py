@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet
 
+from ..onboard import LiftOnboard, simulates_hardware
 from ..sensors.base import SensorConfig
 from ..sensors.camera import OPTICAL_FORWARD, Camera, Intrinsics
 from .attachment import place_link_at, weld
@@ -177,6 +178,7 @@ class MotherUGV(WheeledRobot):
     """
 
     kind = "mother_ugv"
+    onboard_class = LiftOnboard
     urdf = "mother_ugv.urdf"
     default_limits = MOTHER_LIMITS
 
@@ -217,6 +219,7 @@ class MotherUGV(WheeledRobot):
             physicsClientId=self.cid,
         )
 
+    @simulates_hardware
     def platform_height(self) -> float:
         """Height of the platform above its lowered position (m): 0 on the floor, :attr:`lift_travel` at the capsule."""
         return float(pybullet.getJointState(self.body_id, self.lift_joint, physicsClientId=self.cid)[0])
@@ -284,10 +287,14 @@ class MotherUGV(WheeledRobot):
         self.carried.clear()
 
     # ------------------------------------------------------------ commands
+    def hold_lift(self) -> None:
+        """Hold the platform where it is."""
+        self._command_lift(self.platform_height())
+
     def safe_stop(self) -> None:
         """Stop the base and hold the platform where it is."""
         self.stop()
-        self._command_lift(self.platform_height())
+        self.hold_lift()
 
     def pre_physics(self, dt: float) -> None:
         """Advance the drive; release carried children once the platform is back on the floor."""

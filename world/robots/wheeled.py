@@ -12,11 +12,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pybullet
+
+from marsupial.geometry import Vector
 
 from ..estimation.ground import LOCALIZATIONS, MapErrors, MapLocalization, OdometryErrors, WheelOdometry
 from ..onboard import WheeledOnboard, simulates_hardware
@@ -74,7 +76,7 @@ class WheeledRobot(Robot):
         self,
         world: World,
         name: str,
-        pose: Sequence[float] = (0.0, 0.0, 0.0),
+        pose: Vector = (0.0, 0.0, 0.0),
         limits: DiffDriveLimits | Mapping[str, float] | None = None,
         localization: str = "odometry",
     ):

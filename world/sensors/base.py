@@ -9,6 +9,7 @@ is older than the configured latency. All times are simulated seconds.
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
@@ -44,7 +45,7 @@ class SensorConfig:
         if self.noise_std < 0 or self.latency_s < 0:
             raise ValueError("noise_std and latency_s must be >= 0")
 
-    def with_overrides(self, overrides: dict[str, Any] | None) -> SensorConfig:
+    def with_overrides(self, overrides: Mapping[str, Any] | None) -> SensorConfig:
         """A copy with the fields named in ``overrides`` replaced (unknown names are an error)."""
         if not overrides:
             return self

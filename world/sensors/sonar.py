@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING
 
 import pybullet
 
+from marsupial.geometry import Vector
+
 from .base import Sensor, SensorConfig
 
 if TYPE_CHECKING:
@@ -71,6 +73,8 @@ class Sonar(Sensor[RangeData]):
 
     def measure(self) -> RangeData:
         """Cast the beam now: shortest hit (m) of the rays not on the robot itself, with noise."""
+        p_link: Vector
+        q_link: Vector
         if self.link == -1:
             p_link, q_link, _, _ = self.robot.base_state()
         else:

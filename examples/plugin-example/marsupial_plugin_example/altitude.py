@@ -7,7 +7,7 @@ from typing import ClassVar
 from marsupial.trees.skill import Condition, NodeParams
 
 
-class AltitudeAbove(Condition):
+class AltitudeAbove(Condition["AltitudeAbove.Params"]):
     """Holds while the robot's estimated height is above a value (its onboard estimate, navigation frame)."""
 
     class Params(NodeParams):

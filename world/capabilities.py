@@ -1,0 +1,189 @@
+"""What a robot can do, as typed protocols of its onboard interface, and the resources its commands drive.
+
+A node states the robots it accepts by capability (``robot_kinds =
+(Rotorcraft,)``), and a team-member parameter can require one
+(``TeamMember(Carrier)``); the compiler checks them against the onboard
+interface class of each robot kind (:func:`provides`), and skills test a
+member with ``isinstance(context.onboard(name), Carrier)``. One vocabulary
+serves both: these protocols, implemented by the interfaces of
+:mod:`marsupial.world.onboard`.
+
+Resources are the parts of a robot that one node at a time drives
+(:data:`RESOURCES`); each command method of an onboard interface drives one
+(:attr:`~marsupial.world.onboard.Onboard.commands`), and the run's arbiter
+stamps commands per robot and resource (:mod:`marsupial.trees.arbitration`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from .energy import BatteryStatus
+    from .onboard import DockingPort, SensorPort
+
+#: the resources of the robots: wheeled base, arm joints, rotors (flight controller and its estimator),
+#: docking device (magnet and levers), gripper, lifting platform
+RESOURCES: tuple[str, ...] = ("base", "arm", "rotors", "docking", "gripper", "lift")
+
+
+@runtime_checkable
+class HasBattery(Protocol):
+    """A robot with a battery monitor (state of charge, voltage, current)."""
+
+    def battery(self) -> BatteryStatus | None:
+        """Latest battery-monitor sample, ``None`` before one."""
+
+
+@runtime_checkable
+class HasBase(Protocol):
+    """A wheeled base (resource ``base``): drive commands, wheel-encoder speed, drive limits."""
+
+    def drive(self, v: float, omega: float) -> None:
+        """Command forward speed ``v`` (m/s) and yaw rate ``omega`` (rad/s)."""
+
+    def stop(self) -> None:
+        """Command zero speed."""
+
+    def speed(self) -> float:
+        """Forward speed (m/s) from the wheel encoders."""
+
+    def footprint_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """Estimated pose of ``base_footprint``: position (m), quaternion."""
+
+
+@runtime_checkable
+class HasLidar(Protocol):
+    """A robot with a planar LiDAR (sensor ``lidar``)."""
+
+    @property
+    def lidar(self) -> SensorPort:
+        """The planar LiDAR."""
+
+
+@runtime_checkable
+class HasPlatform(HasBase, Protocol):
+    """A wheeled base carrying a landing platform."""
+
+    @property
+    def platform_size(self) -> tuple[float, float]:
+        """Platform length and width (m)."""
+
+
+@runtime_checkable
+class Rotorcraft(HasBattery, Protocol):
+    """A quadrotor's flight controller (resource ``rotors``): velocity commands, motors, arming and dock states."""
+
+    def command_velocity(self, vx: float, vy: float, vz: float, yaw_rate: float = 0.0, frame: str = "body") -> None:
+        """Fly at ``(vx, vy, vz)`` m/s turning at ``yaw_rate`` rad/s."""
+
+    def hover(self) -> None:
+        """Hold the present (estimated) position."""
+
+    def set_motors(self, on: bool) -> None:
+        """Start (arm) or stop the motors."""
+
+    def reset_estimate(self, position: Sequence[float], yaw: float) -> None:
+        """Restart the onboard estimate at ``position`` (m) and ``yaw`` (rad)."""
+
+    @property
+    def motors_on(self) -> bool:
+        """True while the motors run."""
+
+    @property
+    def docked(self) -> bool:
+        """True while a docking device holds the vehicle."""
+
+    @property
+    def thrust(self) -> float:
+        """Total rotor thrust (N)."""
+
+    @property
+    def mass(self) -> float:
+        """Take-off mass (kg)."""
+
+
+@runtime_checkable
+class HasArm(Protocol):
+    """A robot arm (resource ``arm``): joint targets, hold, joint encoders."""
+
+    def set_joint_targets(self, q: Any) -> None:
+        """Move the arm toward joint angles ``q`` (rad)."""
+
+    def hold_arm(self) -> None:
+        """Hold every joint where its encoder reads it now."""
+
+    def joint_positions(self) -> np.ndarray:
+        """Joint angles (rad) from the encoders."""
+
+
+@runtime_checkable
+class Carrier(HasArm, HasBase, Protocol):
+    """A carrier with a docking device on its arm (resources ``base``, ``arm``, ``docking``): the mobile manipulator."""
+
+    @property
+    def docking(self) -> DockingPort:
+        """Part A of the docking device (resource ``docking``): magnet, levers, switches."""
+
+    @property
+    def arm_kinematics(self) -> Any:
+        """Kinematic model of the arm (frame M → ``part_a``), from the URDF."""
+
+    def arm_pose(self, name: str) -> np.ndarray:
+        """Joint angles (rad) of a named arm pose."""
+
+
+@runtime_checkable
+class HasGripper(Protocol):
+    """A gripper (resource ``gripper``): open, close, opening."""
+
+    def open_gripper(self) -> None:
+        """Open the fingers."""
+
+    def close_gripper(self) -> None:
+        """Close the fingers."""
+
+    def gripper_opening(self) -> float:
+        """Gap between the fingers (m), from their encoder."""
+
+
+@runtime_checkable
+class HasLift(Protocol):
+    """A lifting platform (resource ``lift``): raise, lower, height."""
+
+    def raise_platform(self) -> list[str]:
+        """Raise the platform; returns the team members it lifts."""
+
+    def lower_platform(self) -> None:
+        """Lower the platform to the floor."""
+
+    def platform_height(self) -> float:
+        """Platform height (m) from the lift encoder."""
+
+
+#: every capability, by name (``marsupial skills`` and error messages name them so)
+CAPABILITIES: tuple[type, ...] = (
+    HasBattery, HasBase, HasLidar, HasPlatform, Rotorcraft, HasArm, Carrier, HasGripper, HasLift,
+)
+
+
+def members(capability: type) -> frozenset[str]:
+    """Names of the methods and properties ``capability`` (a protocol of this module) asks for, its bases' included."""
+    names: set[str] = set()
+    for base in capability.__mro__:
+        if base in (Protocol, object) or not getattr(base, "_is_protocol", False):
+            continue
+        names.update(n for n in (*vars(base), *getattr(base, "__annotations__", {})) if not n.startswith("_"))
+    return frozenset(names)
+
+
+def provides(onboard_class: type, capability: type) -> bool:
+    """Whether instances of ``onboard_class`` (an onboard interface class) have ``capability``, checked on the class.
+
+    ``isinstance(interface, capability)`` answers the same for an instance;
+    this form lets the compiler check a robot kind before any world exists.
+    """
+    return all(hasattr(onboard_class, name) for name in members(capability))
