@@ -268,6 +268,12 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P]):
             cls.Params = argument
         if not (isinstance(cls.Params, type) and issubclass(cls.Params, NodeParams)):
             raise TypeError(f"{cls.__name__}: its parameter class must derive from NodeParams, not {cls.Params!r}")
+        for kind in cls.robot_kinds or ():
+            if not isinstance(kind, type):
+                raise TypeError(
+                    f"{cls.__name__}: robot_kinds lists capabilities (protocols of marsupial.world.capabilities, "
+                    f"e.g. Rotorcraft), not {kind!r}"
+                )
 
     def __init__(self, name: str, params: P | None = None, context: RunContext | None = None, robot: str | None = None):
         super().__init__(name)
