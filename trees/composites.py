@@ -123,7 +123,7 @@ class SimTimeout(py_trees.decorators.Decorator):
         self._clock = clock
         self._deadline = 0.0
 
-    def btcpp_ports(self) -> dict[str, int]:
+    def btcpp_ports(self) -> dict[str, float]:
         """BehaviorTree.CPP ``Timeout`` port: the limit in milliseconds."""
         return {"msec": int(round(self.seconds * 1000.0))}
 

@@ -18,7 +18,10 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
+
+if TYPE_CHECKING:
+    from foxglove.websocket import ServerListener
 
 __all__ = ["DEFAULT_HOST", "DEFAULT_PORT", "LATCHED_TOPICS", "LiveSink"]
 
@@ -49,7 +52,7 @@ class LiveSink:
         self._last_ns = -1
         self._stopped = False
         self.server = foxglove.start_server(
-            name=name, host=host, port=port, capabilities=[Capability.Time], server_listener=self, context=self.context
+            name=name, host=host, port=port, capabilities=[Capability.Time], server_listener=cast("ServerListener", self), context=self.context
         )
 
     @property

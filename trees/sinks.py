@@ -67,6 +67,6 @@ class McapSink:
     def close(self) -> None:
         """Write the summary, indexes and CRCs, and close the file (closed even if finishing fails)."""
         try:
-            self.writer.finish()
+            self.writer.finish()  # type: ignore[no-untyped-call]
         finally:
             self._file.close()

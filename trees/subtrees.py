@@ -113,8 +113,9 @@ MERGE_KEY = "<<"
 
 
 def merge_group(
-    group: Any, written: Any, explicit: dict, path: tuple, source: SourceDoc, result: Resolved, note: str | None
-) -> dict:
+    group: Any, written: Any, explicit: dict[str, Any], path: tuple[Any, ...], source: SourceDoc, result: Resolved,
+    note: str | None,
+) -> dict[str, Any]:
     """``explicit`` (a mapping at ``path``) over the settings ``group`` that its ``<<: "${name}"`` key merges.
 
     Keys written beside ``<<`` win. A merged key is located at the ``<<`` key (its position is recorded in
@@ -279,7 +280,7 @@ class _Expander:
             )
         return values
 
-    def settings(self, node: SubtreeNode, rel: tuple, default: Any, value: Any) -> Any:
+    def settings(self, node: SubtreeNode, rel: tuple[Any, ...], default: Any, value: Any) -> Any:
         """``value`` given for a subtree parameter (at ``params`` + ``rel`` of the include) over its ``default``.
 
         A default that is a non-empty mapping is a settings group: a mapping given for it updates it key

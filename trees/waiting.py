@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import py_trees
 from py_trees.behaviour import Behaviour
@@ -51,7 +51,7 @@ class WaitUntil(py_trees.decorators.Decorator):
     The condition is ticked every tick (it never runs); the node commands nothing.
     """
 
-    def __init__(self, name: str, condition: Condition, timeout: float, clock: Callable[[], float]):
+    def __init__(self, name: str, condition: Condition[Any], timeout: float, clock: Callable[[], float]):
         super().__init__(name=name, child=condition)
         self.timeout = float(timeout)
         self._clock = clock

@@ -374,7 +374,7 @@ class WheeledOnboard(Onboard):
         Behind a map localiser (``localization: map``) this is the dead reckoning the fixes correct, free of
         their jumps; without one it is :meth:`estimate` itself.
         """
-        return self._robot.odometry.estimate()  # type: ignore[attr-defined, no-any-return]
+        return self._robot.odometry.estimate()  # type: ignore[attr-defined]
 
 
 class PlatformOnboard(WheeledOnboard):

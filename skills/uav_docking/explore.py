@@ -400,7 +400,10 @@ class Explore(Skill["Explore.Params"]):
             return
         p = self.params
         frame = reading.data
-        position, R_nav_optical = in_nav_frame(self.history.at(reading.stamp), self.camera_mount)
+        body = self.history.at(reading.stamp)
+        if body is None:  # no estimate yet
+            return
+        position, R_nav_optical = in_nav_frame(body, self.camera_mount)
         bearings = view_bearings(frame.K, frame.rgb.shape[1], R_nav_optical)
         ranges = plan_ranges(self.map, position[:2], bearings, p.view_range)
         self.seen |= visible_cells(self.map, position[:2], bearings, ranges, p.view_range)

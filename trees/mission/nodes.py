@@ -60,7 +60,7 @@ NODE_KINDS = (
 _SHARED_KEYS = {"until": "condition", "wait_until": "timeout"}
 
 
-def structural_keys(value: Mapping) -> list[str]:
+def structural_keys(value: Mapping[str, Any]) -> list[str]:
     """The node-type keys of a node mapping, ``until``'s ``condition`` and ``wait_until``'s ``timeout`` left out."""
     kinds = [k for k in NODE_KINDS if k in value]
     for kind, field_name in _SHARED_KEYS.items():

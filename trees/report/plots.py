@@ -18,6 +18,7 @@ from typing import Any, TypeVar
 
 import matplotlib
 import numpy as np
+from matplotlib.artist import Artist
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch, Polygon
@@ -27,7 +28,7 @@ __all__ = ["STATUS_COLOURS", "histograms", "map_svg", "metric_svgs", "outcome_sv
 
 #: behaviour-tree status -> bar colour in the timeline (IDLE draws nothing)
 STATUS_COLOURS = {"RUNNING": "#f0a500", "SUCCESS": "#2e9d4f", "FAILURE": "#d1343b"}
-_RC = {"svg.fonttype": "none", "svg.hashsalt": "marsupial", "font.size": 9, "axes.titlesize": 10,
+_RC: dict[str, Any] = {"svg.fonttype": "none", "svg.hashsalt": "marsupial", "font.size": 9, "axes.titlesize": 10,
        "axes.spines.top": False, "axes.spines.right": False}
 _ROBOT_COLOURS = ("#1f77b4", "#9467bd", "#ff7f0e", "#17becf", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22")
 _SVG_SIZE = re.compile(r'<svg([^>]*?) width="[^"]*" height="[^"]*"')
@@ -39,7 +40,7 @@ def _styled(function: _F) -> _F:
 
     @functools.wraps(function)
     def styled(*args: Any, **kwargs: Any) -> Any:
-        with matplotlib.rc_context(_RC):
+        with matplotlib.rc_context(_RC):  # type: ignore[arg-type]  # (keys are checked by matplotlib)
             return function(*args, **kwargs)
 
     return styled  # type: ignore[return-value]
@@ -77,7 +78,8 @@ def _footprint(kind: str, primitive: Mapping[str, Any]) -> tuple[Any, list[float
         hx, hy = size["x"] / 2, size["y"] / 2
         corners = [(p["x"] + c * dx - s * dy, p["y"] + s * dx + c * dy) for dx, dy in
                    ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy))]
-        return Polygon(corners, closed=True, facecolor=face, edgecolor="#444", lw=0.5), *map(list, zip(*corners))
+        xs, ys = zip(*corners, strict=True)
+        return Polygon(corners, closed=True, facecolor=face, edgecolor="#444", lw=0.5), list(xs), list(ys)
     r = size["x"] / 2
     return (Circle((p["x"], p["y"]), r, facecolor=face, edgecolor="#444", lw=0.5),
             [p["x"] - r, p["x"] + r], [p["y"] - r, p["y"] + r])
@@ -183,7 +185,7 @@ def timeline_svg(
     ax.set_yticks([])
     ax.set_xlabel("simulated time (s)")
     ax.grid(True, axis="x", lw=0.3, alpha=0.6)
-    handles = [Patch(color=c, label=s) for s, c in STATUS_COLOURS.items()]
+    handles: list[Artist] = [Patch(color=c, label=s) for s, c in STATUS_COLOURS.items()]
     handles.append(Line2D([], [], marker="v", color="black", ls="", label="preempted"))
     if operator:
         handles.append(Line2D([], [], color="#555", ls="--", label="operator command"))

@@ -165,14 +165,14 @@ def run_context(log: RunLog, links: Mapping[str, str] | None = None) -> dict[str
         paths[robot] = tracks
     scene = log.messages("/scene")[0].data if log.schemas.get("/scene") and log.messages("/scene") else None
     rows = tree_rows(log.tree_snapshots, end)
-    row_of = {}
+    row_of: dict[str, int] = {}
     for index, row in enumerate(rows):
         row_of.setdefault(row["name"], index)
     preemptions = [{"t": e["t"], "row": row_of.get(e["preempted"]), "event": e} for e in log.events_of("preemption")]
     operator = [{"t": e["t"], "command": e["command"]} for e in log.events_of("operator")]
     series, finals = _metrics(log)
     phases = phase_rows(log.events, end)
-    run_end = next((e for e in reversed(log.events) if e["kind"] == "run_end"), {})
+    run_end: dict[str, Any] = next((e for e in reversed(log.events) if e["kind"] == "run_end"), {})
     errors = [e for e in log.events if e["kind"] == "error"]
     estimate_errors = {}
     for robot, tracks in paths.items():
