@@ -12,12 +12,14 @@ import math
 import os
 import platform
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from rich.console import Console
 from rich.table import Table
+
+from marsupial.trees.campaign import run_campaign
 
 #: one printed table: title, column headers, rows of cell texts
 Section = tuple[str, Sequence[str], Sequence[Sequence[str]]]
@@ -38,10 +40,37 @@ def campaign_arguments(description: str, quick_help: str, out: Path, report: Pat
     parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--quick", action="store_true", help=quick_help)
     parser.add_argument("--workers", type=int, default=2, help="parallel runs (default 2)")
-    parser.add_argument("--runs", type=Path, default=None, help="folder for the campaigns and their logs (default: a temporary one)")
+    parser.add_argument("--runs", type=Path, default=None,
+                        help="folder for the campaigns and their logs (default: a temporary one); a campaign already "
+                             "finished there with the same plan is read back instead of run again")
     parser.add_argument("--out", type=Path, default=out, help=f"JSON output (default {out.relative_to(out.parents[2])})")
     parser.add_argument("--report", type=Path, default=report, help="Markdown report (PNGs go to its img/ folder)")
     return parser
+
+
+def campaign(mission: str, trials: int, out: Path, overrides: Mapping[str, str] | None = None,
+             vary: Mapping[str, Sequence[str]] | None = None, base_seed: int = 0, until: float | None = None,
+             workers: int = 1) -> dict[str, Any]:
+    """Run a campaign into ``out`` with every log kept, or read it back if ``out`` already holds the same plan.
+
+    The same plan: mission, seeds, ``--set`` overrides, varied values, time
+    limit and trial count all equal (a benchmark interrupted or re-run with
+    ``--runs DIR`` resumes where it stopped; after a code change, use a new
+    folder). Returns the campaign summary; each trial's record in
+    ``trials.json`` has its CPU seconds (``cpu_time``).
+    """
+    overrides = {k: str(v) for k, v in (overrides or {}).items()}
+    vary = {k: [str(x) for x in v] for k, v in (vary or {}).items()}
+    combos = math.prod(len(v) for v in vary.values()) if vary else 1
+    done = out / "summary.json"
+    if done.exists() and (out / "trials.json").exists():
+        old = json.loads(done.read_text())
+        if (old.get("mission"), old.get("base_seed"), old.get("set"), old.get("vary"), old.get("until"), old.get("trials")) \
+                == (mission, base_seed, overrides, vary, until, trials * combos):
+            print(f"reusing {out} ({old['trials']} trials)")
+            return old
+    return run_campaign(mission, trials, out, base_seed=base_seed, overrides=overrides, vary=vary or None,
+                        workers=workers, until=until, keep_logs="all")
 
 
 def machine_info(**extra: Any) -> dict[str, Any]:
