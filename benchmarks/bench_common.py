@@ -16,10 +16,9 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from marsupial.trees.campaign import run_campaign
 from rich.console import Console
 from rich.table import Table
-
-from marsupial.trees.campaign import run_campaign
 
 #: one printed table: title, column headers, rows of cell texts
 Section = tuple[str, Sequence[str], Sequence[Sequence[str]]]
