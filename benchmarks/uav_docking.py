@@ -32,7 +32,7 @@ every figure is computed from the MCAP logs (``trees/replay.py``):
    the UAV's odometry drift, the optical-flow noise
    ``team.uav.sensors.flow.noise_std`` (``drift``), 4 starts × 1 speed ×
    ``--sweep-seeds`` seeds (≥ 20 encounters) per point, with the P_Q^M RMS.
-   The default point of both sweeps is one campaign, run once.
+   The default point of both sweeps is read from the randomized encounters (their grid holds it).
 3. Speed — the Motion Engine's planning cycle (p50/p95) and IK engine solves/s
    (1 vs 2 workers), measured by ``benchmarks/motion_engine.py``; the
    eye-in-hand camera's cost and the bundle detection at 640×480 and
@@ -192,18 +192,22 @@ def run_usar(runs: Path, workers: int) -> tuple[dict[str, Any], dict[str, RunLog
 
 # ------------------------------------------------------------------ encounters
 def encounter_grid(quick: bool, seed: int = 20) -> dict[str, list[str]]:
-    """Random UAV starts within 1 m of the meeting point (heading too) and carrier speeds ≤ 0.5 m/s."""
+    """Random UAV starts within 1 m of the meeting point (heading too) and carrier speeds ≤ 0.5 m/s.
+
+    5 starts × 4 speeds; ``quick``: the first 4 starts × the first speed (the
+    sweeps' grid, a part of the full one).
+    """
     rng = np.random.default_rng(seed)
     starts = []
-    for _ in range(4 if quick else 5):
+    for _ in range(5):
         while True:  # within 1 m, not below 0.3 m under the meeting point (the arm is there)
             offset = rng.uniform(-1.0, 1.0, 3)
             if np.linalg.norm(offset) <= 1.0 and offset[2] >= -0.3:
                 break
         x, y, z = MEETING_UAV + offset
         starts.append(f"[{x:.3f}, {y:.3f}, {z:.3f}, {rng.uniform(-math.pi, math.pi):.3f}]")
-    speeds = [f"{v:.3f}" for v in rng.uniform(0.05, 0.5, 1 if quick else 4)]
-    return {"team.uav.pose": starts, "carrier_speed": speeds}
+    speeds = [f"{v:.3f}" for v in rng.uniform(0.05, 0.5, 4)]
+    return {"team.uav.pose": starts[:4], "carrier_speed": speeds[:1]} if quick else {"team.uav.pose": starts, "carrier_speed": speeds}
 
 
 def run_encounters(runs: Path, workers: int, quick: bool, seeds: int) -> dict[str, Any]:
@@ -270,21 +274,37 @@ def pose_in_M_rms(log: RunLog) -> float | None:
     return float(np.sqrt(np.mean(np.square(errors)))) if errors else None
 
 
+def sweep_point(runs: Path, workers: int, overrides: dict[str, str], seeds: int, name: str) -> list[dict[str, Any]]:
+    """The trial records of one sweep point (4 starts × 1 speed × ``seeds``).
+
+    At the default sensing (no override) they are the matching trials of the
+    randomized encounters (``runs/encounters``: the same starts, speed and
+    seeds) when those ran with at least ``seeds`` seeds; else a campaign of
+    their own (``runs/<name>``).
+    """
+    grid = encounter_grid(quick=True)
+    main = runs / "encounters" / "trials.json"
+    if not overrides and main.exists():
+        records = [r for r in json.loads(main.read_text()) if r["params"]["team.uav.pose"] in grid["team.uav.pose"]
+                   and r["params"]["carrier_speed"] in grid["carrier_speed"] and r["seed"] < seeds]
+        if len(records) == len(grid["team.uav.pose"]) * seeds:
+            return records
+    out = runs / name
+    campaign(str(ENCOUNTER), seeds, out, overrides=overrides, vary=grid, workers=workers)
+    return json.loads((out / "trials.json").read_text())
+
+
 def run_sweep(runs: Path, workers: int, name: str, seeds: int) -> list[dict[str, Any]]:
     """Success, encounter→lock time and P_Q^M RMS at each value of one sensing knob (4 starts × 1 speed × ``seeds``)."""
     key, values, default = SWEEPS[name]
-    grid = encounter_grid(quick=True)
     rows = []
     for value in values:
-        out = runs / ("sweep_default" if value == default else f"sweep_{name}_{value}")
         overrides = {} if value == default else {key: value}
-        summary = campaign(str(ENCOUNTER), seeds, out, overrides=overrides, vary=grid, workers=workers)
-        records = json.loads((out / "trials.json").read_text())
+        records = sweep_point(runs, workers, overrides, seeds, "sweep_default" if value == default else f"sweep_{name}_{value}")
         times = [r["metrics"]["docking_time[uav]"] for r in records if r["success"] and "docking_time[uav]" in r["metrics"]]
-        rms = [pose_in_M_rms(read_log(p)) for p in sorted((out / "logs").glob("*.mcap"))]
-        rms = [v for v in rms if v is not None]
+        rms = [v for v in (pose_in_M_rms(read_log(r["log"])) for r in records if r["log"]) if v is not None]
         rows.append({
-            "key": key, "value": value, "trials": len(records), "successes": summary["successes"],
+            "key": key, "value": value, "trials": len(records), "successes": sum(r["success"] for r in records),
             "unintended_contacts": int(sum(r["metrics"].get("unintended_contacts[uav]", 0.0) for r in records)),
             "encounter_to_lock_median_s": statistics.median(times) if times else None,
             "pose_in_M_rms_m": statistics.median(rms) if rms else None,
@@ -675,8 +695,8 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path) -> str:
                       "`world.sensing.noise_scale` multiplies every noise, bias, drift, latency and drop figure of "
                       "both robots' sensors, estimators and the team link (0: perfect sensors, 1: the defaults); "
                       "`team.uav.sensors.flow.noise_std` is the UAV's optical-flow velocity noise (m/s, default "
-                      "0.02), the source of its odometry drift. The default point is one campaign shared by both "
-                      "sweeps.", "", markdown_table(header, rows), ""]
+                      "0.02), the source of its odometry drift. The default point of both sweeps is the matching "
+                      "part of the randomized encounters above (the same starts, speed and seeds).", "", markdown_table(header, rows), ""]
         else:
             parts += [f"### {title}", "", markdown_table(header, rows), ""]
     ik = results["ik_engine"]["closed_form"]
