@@ -16,7 +16,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from marsupial.trees.campaign import run_campaign
+from marsupial.trees.campaign import run_campaign, summarize
 from rich.console import Console
 from rich.table import Table
 
@@ -50,25 +50,47 @@ def campaign_arguments(description: str, quick_help: str, out: Path, report: Pat
 def campaign(mission: str, trials: int, out: Path, overrides: Mapping[str, str] | None = None,
              vary: Mapping[str, Sequence[str]] | None = None, base_seed: int = 0, until: float | None = None,
              workers: int = 1) -> dict[str, Any]:
-    """Run a campaign into ``out`` with every log kept, or read it back if ``out`` already holds the same plan.
+    """Run a campaign into ``out`` with every log kept, one seed at a time, reading back the seeds already run.
 
-    The same plan: mission, seeds, ``--set`` overrides, varied values, time
-    limit and trial count all equal (a benchmark interrupted or re-run with
-    ``--runs DIR`` resumes where it stopped; after a code change, use a new
-    folder). Returns the campaign summary; each trial's record in
-    ``trials.json`` has its CPU seconds (``cpu_time``).
+    Each seed is a campaign of its own (``out/seed_<s>``; a single-trial
+    campaign stays in ``out``), read back when that folder already holds the
+    same plan: mission, seed, ``--set`` overrides, varied values and time
+    limit. A benchmark interrupted or re-run with ``--runs DIR`` resumes where
+    it stopped, and one re-run with more trials runs only the new seeds
+    (after a code change, use a new folder). The merged records are written
+    to ``out/trials.json`` (each with its CPU seconds, ``cpu_time``) and the
+    summary of them all to ``out/summary.json``, which is returned.
     """
     overrides = {k: str(v) for k, v in (overrides or {}).items()}
     vary = {k: [str(x) for x in v] for k, v in (vary or {}).items()}
+    if trials == 1:
+        return _campaign_of_one_seed(mission, out, overrides, vary, base_seed, until, workers)
+    records = []
+    for seed in range(base_seed, base_seed + trials):
+        _campaign_of_one_seed(mission, out / f"seed_{seed}", overrides, vary, seed, until, workers)
+        records += json.loads((out / f"seed_{seed}" / "trials.json").read_text())
+    for index, record in enumerate(records):
+        record["trial"] = index
+    summary = {"mission": mission, "base_seed": base_seed, "set": overrides, "vary": vary, "until": until,
+               **summarize(records)}
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "trials.json").write_text(json.dumps(records, indent=2))
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    return summary
+
+
+def _campaign_of_one_seed(mission: str, out: Path, overrides: dict[str, str], vary: dict[str, list[str]], seed: int,
+                          until: float | None, workers: int) -> dict[str, Any]:
+    """One trial per combination of ``vary`` at ``seed`` into ``out``, or its summary read back (same plan)."""
     combos = math.prod(len(v) for v in vary.values()) if vary else 1
     done = out / "summary.json"
     if done.exists() and (out / "trials.json").exists():
         old = json.loads(done.read_text())
         if (old.get("mission"), old.get("base_seed"), old.get("set"), old.get("vary"), old.get("until"), old.get("trials")) \
-                == (mission, base_seed, overrides, vary, until, trials * combos):
+                == (mission, seed, overrides, vary, until, combos):
             print(f"reusing {out} ({old['trials']} trials)")
             return old
-    return run_campaign(mission, trials, out, base_seed=base_seed, overrides=overrides, vary=vary or None,
+    return run_campaign(mission, 1, out, base_seed=seed, overrides=overrides, vary=vary or None,
                         workers=workers, until=until, keep_logs="all")
 
 

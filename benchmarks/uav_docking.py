@@ -216,7 +216,7 @@ def run_encounters(runs: Path, workers: int, quick: bool, seeds: int) -> dict[st
     grid = encounter_grid(quick)
     summary = campaign(str(ENCOUNTER), seeds, out, vary=grid, workers=workers)
     records = json.loads((out / "trials.json").read_text())
-    rms = [v for v in (pose_in_M_rms(read_log(p)) for p in sorted((out / "logs").glob("*.mcap"))) if v is not None]
+    rms = [v for v in (pose_in_M_rms(read_log(r["log"])) for r in records if r["log"]) if v is not None]
     times = [r["metrics"]["docking_time[uav]"] for r in records if r["success"] and "docking_time[uav]" in r["metrics"]]
     touches = [r["metrics"].get("unintended_contacts[uav]", 0.0) for r in records]
     return {
