@@ -351,6 +351,18 @@ def camera_and_detection(frames: int) -> dict[str, Any]:
     return results
 
 
+def speed(runs: Path, quick: bool) -> dict[str, Any]:
+    """Planning cycle, IK engine and eye-in-hand camera figures, measured once per ``runs`` folder (``speed.json``)."""
+    cached = runs / ("speed_quick.json" if quick else "speed.json")
+    if cached.exists():
+        print(f"reusing {cached}")
+        return json.loads(cached.read_text())
+    figures = {"planning_cycle": motion_engine.bench_cycles(quick=True), "ik_engine": motion_engine.bench_ik(quick=quick),
+               "camera": camera_and_detection(frames=3 if quick else 10)}
+    cached.write_text(json.dumps(figures, indent=2, default=float))
+    return figures
+
+
 # ------------------------------------------------------------------ plots
 def plots(stats: dict[str, Any], logs: dict[str, RunLog], img: Path) -> dict[str, str]:
     """Figs. 13, 15 and 20 as PNGs in ``img``; returns their paths relative to the report."""
@@ -779,9 +791,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             "machine": machine_info(workers=args.workers, date=time.strftime("%Y-%m-%d")),
             "paper": PAPER,
         }
-        results["planning_cycle"] = motion_engine.bench_cycles(quick=True)
-        results["ik_engine"] = motion_engine.bench_ik(quick=args.quick)
-        results["camera"] = camera_and_detection(frames=3 if args.quick else 10)
+        results.update(speed(runs, args.quick))
         results["encounters"] = run_encounters(runs, args.workers, args.quick, args.encounter_seeds)
         if args.sweep is not None:
             names = list(SWEEPS) if args.sweep == "all" else [args.sweep]
