@@ -52,8 +52,7 @@ def campaign(mission: str, trials: int, out: Path, overrides: Mapping[str, str] 
              workers: int = 1) -> dict[str, Any]:
     """Run a campaign into ``out`` with every log kept, one seed at a time, reading back the seeds already run.
 
-    Each seed is a campaign of its own (``out/seed_<s>``; a single-trial
-    campaign stays in ``out``), read back when that folder already holds the
+    Each seed is a campaign of its own (``out/seed_<s>``), read back when that folder already holds the
     same plan: mission, seed, ``--set`` overrides, varied values and time
     limit. A benchmark interrupted or re-run with ``--runs DIR`` resumes where
     it stopped, and one re-run with more trials runs only the new seeds
@@ -63,8 +62,6 @@ def campaign(mission: str, trials: int, out: Path, overrides: Mapping[str, str] 
     """
     overrides = {k: str(v) for k, v in (overrides or {}).items()}
     vary = {k: [str(x) for x in v] for k, v in (vary or {}).items()}
-    if trials == 1:
-        return _campaign_of_one_seed(mission, out, overrides, vary, base_seed, until, workers)
     records = []
     for seed in range(base_seed, base_seed + trials):
         _campaign_of_one_seed(mission, out / f"seed_{seed}", overrides, vary, seed, until, workers)

@@ -414,7 +414,7 @@ def plots(results: dict[str, Any], img: Path) -> dict[str, str]:
 
 # ------------------------------------------------------------------ report
 def _m(value: float) -> str:
-    return f"{value:.3f}"
+    return "–" if math.isnan(value) else f"{value:.3f}"
 
 
 def verdicts(results: dict[str, Any], cycles: int) -> dict[str, tuple[bool, str]]:
