@@ -1,6 +1,8 @@
 """The landing experiments of Palafox et al. (2019), side by side with the paper: Table 2, Figs. 6–11 and 13.
 
     python benchmarks/landing.py [--quick] [--sweep] [--workers 2] [--runs DIR]
+                                 [--trials 5] [--cycles 50] [--sweep-cycles 10] [--reference-cycles N]
+                                 [--paper-limit S] [--no-gusts]
                                  [--out benchmarks/out/landing.json] [--report docs/results/landing.md]
 
 Everything runs through the campaign runner (``trees/campaign.py``), every
@@ -12,21 +14,32 @@ drifts; the platform's size is a static prior. Sensing is at its default
 (``world.sensing.noise_scale`` 1) unless a row says otherwise.
 
 1. §4.2.1 — ``landing_linear`` and ``landing_circular``, 5 runs each
-   (seeds 0–4) with the reactive controller, the paper's predictive one as
+   (``--trials``; seeds 0–4) with the reactive controller, the paper's predictive one as
    printed (``velocity_feedforward=false``), ours (predictive with the
    velocity feed-forward, the default) and ours at ``noise_scale`` 0
    (perfect sensors, for reference). Per run: mean absolute x / y error from
    take-off to touchdown (the paper's Fig. 10 statistic), landing error.
-2. §4.2.3, Table 2 — ``landing_lifelong``, 50 consecutive cycles at
-   (v, ω) = (0.5, 0.05) and (0.7, 0.07), each with the paper's controller,
-   ours and ours at ``noise_scale`` 0: landings, re-localisations and their
-   reasons, MAE and max error per axis, total test time.
-3. Robustness (not in the paper) — the nominal life-long run with 3 m/s
-   gusts and 10 % frame drops of the bottom camera.
-4. With ``--sweep``: ours on the nominal life-long run (10 cycles) against
-   ``noise_scale`` ∈ {0, 0.5, 1, 2, 4}.
+2. §4.2.3, Table 2 — ``landing_lifelong``, 50 consecutive cycles
+   (``--cycles``) at (v, ω) = (0.5, 0.05) and (0.7, 0.07), each with the
+   paper's controller, ours and ours at ``noise_scale`` 0
+   (``--reference-cycles``): landings, re-localisations and their reasons,
+   MAE and max error per axis, total test time. The paper's controller
+   loses the platform and re-localises for the rest of the run, so its runs
+   stop at a simulated-time limit (``--paper-limit``; default the paper's
+   own total test time, 1072.41 s and 1249.09 s).
+3. Robustness (not in the paper; ``--no-gusts`` leaves it out) — the
+   nominal life-long run with 3 m/s gusts and 10 % frame drops of the
+   bottom camera.
+4. With ``--sweep``: ours on the nominal life-long run (10 cycles,
+   ``--sweep-cycles``) against ``noise_scale`` ∈ {0, 0.5, 1, 2, 4}.
 5. Speed — Algorithm 1 ms/frame at 320×240 on rendered frames (one thread),
-   and the real-time factor of the nominal 50-cycle run (it runs alone).
+   and the real-time factor of the nominal 50-cycle run per CPU second of
+   its own process (each trial's ``cpu_time``).
+
+``--runs DIR`` keeps every campaign and its logs in DIR, one folder per
+seed, and reads back those already finished with the same plan: an
+interrupted run resumes, and a re-run with higher counts runs only what is
+new.
 
 Errors are scored on simulator truth by the run's referee
 (``world/scoring.py``: ``tracking_error_x`` / ``_y``, the platform centre
