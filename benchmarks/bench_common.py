@@ -78,15 +78,23 @@ def campaign(mission: str, trials: int, out: Path, overrides: Mapping[str, str] 
 
 def _campaign_of_one_seed(mission: str, out: Path, overrides: dict[str, str], vary: dict[str, list[str]], seed: int,
                           until: float | None, workers: int) -> dict[str, Any]:
-    """One trial per combination of ``vary`` at ``seed`` into ``out``, or its summary read back (same plan)."""
+    """One trial per combination of ``vary`` at ``seed`` into ``out``, or its summary read back (same plan).
+
+    A campaign with another time limit counts as the same plan when none of
+    its trials was stopped by a limit and each ended before ``until``: the
+    runs are deterministic, so they are the runs ``until`` would give.
+    """
     combos = math.prod(len(v) for v in vary.values()) if vary else 1
     done = out / "summary.json"
     if done.exists() and (out / "trials.json").exists():
         old = json.loads(done.read_text())
-        if (old.get("mission"), old.get("base_seed"), old.get("set"), old.get("vary"), old.get("until"), old.get("trials")) \
-                == (mission, seed, overrides, vary, until, combos):
-            print(f"reusing {out} ({old['trials']} trials)")
-            return old
+        if (old.get("mission"), old.get("base_seed"), old.get("set"), old.get("vary"), old.get("trials")) \
+                == (mission, seed, overrides, vary, combos):
+            records = json.loads((out / "trials.json").read_text())
+            ended = all(r["outcome"] != "time_limit" and (until is None or r["sim_time"] < until) for r in records)
+            if old.get("until") == until or ended:
+                print(f"reusing {out} ({old['trials']} trials)")
+                return old
     return run_campaign(mission, 1, out, base_seed=seed, overrides=overrides, vary=vary or None,
                         workers=workers, until=until, keep_logs="all")
 
