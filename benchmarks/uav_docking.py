@@ -587,7 +587,7 @@ def tables(results: dict[str, Any]) -> list[tuple[str, list[str], list[list[str]
          ["knob", "value", "locked", "contacts", "encounter → lock median (s)", "P_Q^M RMS (cm)"], sweeps),
     ] if sweeps else []) + [
         ("Speed", ["", "paper", "ours"], speed),
-        ("Eye-in-hand camera: render and bundle detection per frame (median)",
+        ("Eye-in-hand camera: render and bundle detection per frame (median wall ms: upper bounds on a loaded machine)",
          ["resolution", "distance (m)", "render ms", "detect ms", "found", "error (mm)"], camera),
     ]
 
