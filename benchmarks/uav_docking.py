@@ -730,7 +730,8 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path) -> str:
                       "", markdown_table(header, rows), ""]
         elif title.startswith("Sensitivity"):
             parts += [f"### {title}", "",
-                      "4 UAV starts × 1 carrier speed × seeds per point, each point a campaign of its own. "
+                      "4 UAV starts × 1 carrier speed × seeds per point; P_Q^M RMS: the median over the point's "
+                      "runs of each run's RMS error while tracking. "
                       "`world.sensing.noise_scale` multiplies every noise, bias, drift, latency and drop figure of "
                       "both robots' sensors, estimators and the team link (0: perfect sensors, 1: the defaults); "
                       "`team.uav.sensors.flow.noise_std` is the UAV's optical-flow velocity noise (m/s, default "
