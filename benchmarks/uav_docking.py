@@ -800,6 +800,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--sweep", choices=(*SWEEPS, "all"), default=None,
                         help="also run the sensitivity sweep(s): noise_scale (noise) or the UAV's odometry drift (drift)")
     parser.add_argument("--sweep-seeds", type=int, default=5, help="seeds per sweep point (× 4 starts; default 5 = 20 encounters)")
+    parser.add_argument("--drift-seeds", type=int, default=None,
+                        help="seeds per point of the drift sweep (default: --sweep-seeds)")
     parser.add_argument("--encounter-seeds", type=int, default=5,
                         help="seeds per start × speed of the randomized encounters (default 5: 100 encounters, "
                              "20 with --quick)")
@@ -823,7 +825,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         results["encounters"] = run_encounters(runs, args.workers, args.quick, args.encounter_seeds)
         if args.sweep is not None:
             names = list(SWEEPS) if args.sweep == "all" else [args.sweep]
-            results["sweeps"] = {name: run_sweep(runs, args.workers, name, args.sweep_seeds) for name in names}
+            seeds = {"noise": args.sweep_seeds, "drift": args.drift_seeds or args.sweep_seeds}
+            results["sweeps"] = {name: run_sweep(runs, args.workers, name, seeds[name]) for name in names}
         images: dict[str, str] = {}
         if not args.no_mission:
             results["usar"], logs = run_usar(runs, args.workers)
