@@ -30,7 +30,7 @@ every figure is computed from the MCAP logs (``trees/replay.py``):
 2b. Sensitivity (``--sweep``): success and encounter→lock time against
    ``world.sensing.noise_scale`` ∈ {0, 0.5, 1, 2, 4} (``noise``) and against
    the UAV's odometry drift, the optical-flow noise
-   ``team.uav.sensors.flow.noise_std`` (``drift``), 4 starts × 1 speed ×
+   ``team.uav.sensors={flow: {noise_std: …}}`` (``drift``), 4 starts × 1 speed ×
    ``--sweep-seeds`` seeds (≥ 20 encounters) per point, with the P_Q^M RMS.
    The default point of both sweeps is read from the randomized encounters (their grid holds it).
 3. Speed — the Motion Engine's planning cycle (p50/p95) and IK engine solves/s
@@ -80,7 +80,8 @@ ENCOUNTER = ROOT / "benchmarks" / "missions" / "docking_encounter.yaml"
 MISSION = "usar_docking"
 SWEEPS = {  # --sweep: mission key, its values, its default value (that point runs with no override, once for both)
     "noise": ("world.sensing.noise_scale", ("0", "0.5", "1", "2", "4"), "1"),
-    "drift": ("team.uav.sensors.flow.noise_std", ("0.02", "0.05", "0.1", "0.2"), "0.02"),  # m/s
+    "drift": ("team.uav.sensors", tuple(f"{{flow: {{noise_std: {v}}}}}" for v in ("0.02", "0.05", "0.1", "0.2")),
+              "{flow: {noise_std: 0.02}}"),  # the UAV's optical-flow noise (m/s)
 }
 CAPACITY_MAH = BEBOP2.battery.capacity_mAh
 
@@ -734,7 +735,7 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path) -> str:
                       "runs of each run's RMS error while tracking. "
                       "`world.sensing.noise_scale` multiplies every noise, bias, drift, latency and drop figure of "
                       "both robots' sensors, estimators and the team link (0: perfect sensors, 1: the defaults); "
-                      "`team.uav.sensors.flow.noise_std` is the UAV's optical-flow velocity noise (m/s, default "
+                      "`team.uav.sensors={flow: {noise_std: …}}` sets the UAV's optical-flow velocity noise (m/s, default "
                       "0.02), the source of its odometry drift. The default point of both sweeps is the matching "
                       "part of the randomized encounters above (the same starts, speed and seeds).", "", markdown_table(header, rows), ""]
         else:
