@@ -56,6 +56,7 @@ def test_local_campaign_writes_trials_and_summary(mission, tmp_path):
     assert [(t["seed"], t["params"]["limit"], t["outcome"]) for t in trials] == [
         (3, "0.5", "failure"), (4, "0.5", "failure"), (3, "30", "success"), (4, "30", "success")]
     assert summary["success_rate"] == 0.5
+    assert all(t["cpu_time"] > 0.0 for t in trials)  # each trial's own CPU seconds, for the benchmarks' RTF
     assert summary["success_rate_ci95"] == pytest.approx(list(wilson_interval(2, 4)))
     assert [g["success_rate"] for g in summary["groups"]] == [0.0, 1.0]
     assert json.loads((out / "summary.json").read_text()) == summary

@@ -23,6 +23,7 @@ import math
 import multiprocessing
 import os
 import statistics
+import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
@@ -56,9 +57,13 @@ class Trial:
 
 
 def run_trial(trial: Trial) -> dict[str, Any]:
-    """Run one trial in this process and return its JSON-ready record (the same on every backend)."""
+    """Run one trial in this process and return its JSON-ready record (the same on every backend).
+
+    ``cpu_time`` is this process's CPU seconds for the trial (a measurement of cost, never fed to the run).
+    """
     from .runner import run_mission  # imported in the worker: the parent needs no pybullet
 
+    cpu_started = time.process_time()
     log = None
     if trial.log_dir is not None and trial.keep_logs != "none":
         log = Path(trial.log_dir) / f"trial_{trial.index:04d}_seed_{trial.seed}.mcap"
@@ -72,13 +77,14 @@ def run_trial(trial: Trial) -> dict[str, Any]:
             overrides={**trial.overrides, **trial.varied},
         )
     except MissionError as err:  # e.g. a world value only checked when the world is built
-        return {**_record(trial, "error", 0.0, 0, 0.0, {}, str(err)), "log": None}
+        return {**_record(trial, "error", 0.0, 0, 0.0, {}, str(err)), "cpu_time": time.process_time() - cpu_started,
+                "log": None}
     if log is not None and result.outcome == "success" and trial.keep_logs == "failed":
         log.unlink(missing_ok=True)
         log = None
     message = result.message.strip().splitlines()[0] if result.message else ""
     record = _record(trial, result.outcome, result.sim_time, result.ticks, result.wall_time, result.metrics, message)
-    return {**record, "log": str(log) if log is not None else None}
+    return {**record, "cpu_time": time.process_time() - cpu_started, "log": str(log) if log is not None else None}
 
 
 def _record(trial: Trial, outcome: str, sim_time: float, ticks: int, wall_time: float,
