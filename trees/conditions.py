@@ -22,7 +22,6 @@ import numpy as np
 from pydantic import Field
 
 from marsupial.sensing import scan_in_body, sensor_mount
-
 from marsupial.world.capabilities import HasBase, HasBattery, HasLidar
 
 from .skill import Condition, NodeParams

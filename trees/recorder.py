@@ -63,6 +63,7 @@ from types import FrameType
 from typing import TYPE_CHECKING, Any
 
 import py_trees
+
 import marsupial
 
 from .btxml import STATUS_NAMES, to_btcpp_xml, walk

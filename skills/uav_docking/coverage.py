@@ -38,7 +38,6 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-
 _NEIGHBOURS = [(-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)]
 
 

@@ -26,11 +26,11 @@ node that takes the arm over in the same tick as they stop keeps it.
 
 from __future__ import annotations
 
+from typing import Annotated
+
 import numpy as np
 from py_trees.common import Status
 from pydantic import Field
-
-from typing import Annotated
 
 from marsupial.trees.skill import NodeParams, Skill, TeamMember
 from marsupial.world.capabilities import Carrier, Rotorcraft

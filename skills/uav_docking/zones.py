@@ -40,6 +40,7 @@ from .cord import Cord
 from .ik_engine import ArmGeometry
 from .vicinity import Vicinity
 
+
 def _fibonacci_sphere(n: int) -> np.ndarray:
     """``(n, 3)`` unit vectors spread evenly over the sphere (Fibonacci lattice)."""
     k = np.arange(n) + 0.5
