@@ -366,9 +366,15 @@ class Navigate(Skill["Navigate.Params"]):
 
     class Params(NodeParams):
         path: str | list[Annotated[list[float], Field(min_length=2, max_length=2)]] | None = "operator_path"
-        """Guide path γ_mm (§V-A): a path of the mission's building plan or [x, y] way-points (m, navigation frame); none: set-points only."""
+        """Guide path γ_mm (§V-A): a path of the mission's building plan or [x, y] way-points (m, navigation frame).
+
+        None: set-points only.
+        """
         setpoints_key: str | None = None
-        """Blackboard key of operator set-points ([x, y] or a list of them, m, navigation frame, §V-B); they replace the path."""
+        """Blackboard key of operator set-points ([x, y] or a list of them, m, navigation frame, §V-B).
+
+        They replace the path.
+        """
         max_speed: float = Field(MAX_SPEED, gt=0.0, le=MAX_SPEED)
         """Speed limit (m/s): 2 m/s, UGV longitudinal limit (§V-B-1)."""
         docking_speed: float = Field(DOCKING_SPEED, gt=0.0)

@@ -193,7 +193,10 @@ class CommandPort:
         return result
 
     def safe_stop(self) -> Stamp | None:
-        """Arbitrated safe stop of the resources of this robot the node claims; the stamp that kept one, else ``None``."""
+        """Arbitrated safe stop of the resources of this robot the node claims.
+
+        The stamp that kept one, else ``None``.
+        """
         node, robot = self._node, self._onboard.name
         resources = [r for r in sorted(self._onboard.resources()) if node.may_command(robot, r)]
         kept = self._arbiter.safe_stop(self._onboard, node.node_id, node.name, resources)

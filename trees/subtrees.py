@@ -181,7 +181,10 @@ SEARCH_PATH_VARIABLE = "MARSUPIAL_SUBTREE_PATH"
 
 
 def allowed_roots(mission_file: Path | None) -> list[Path]:
-    """Folders subtree files may come from: the mission's folder, the package's missions, ``$MARSUPIAL_SUBTREE_PATH``."""
+    """Folders subtree files may come from.
+
+    The mission's folder, the package's missions, ``$MARSUPIAL_SUBTREE_PATH``.
+    """
     base = mission_file.resolve().parent if mission_file is not None else Path.cwd().resolve()
     extra = [Path(p).resolve() for p in os.environ.get(SEARCH_PATH_VARIABLE, "").split(os.pathsep) if p]
     return [base, mission_dir().resolve(), *extra]

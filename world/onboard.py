@@ -254,7 +254,10 @@ class Onboard:
 
     # ------------------------------------------------------------ commands
     def safe_stop(self, resource: str | None = None) -> None:
-        """Leave ``resource`` safe (all when ``None``) by its safe-stop command: hover, stop the wheels, hold the arm."""
+        """Leave ``resource`` safe (all when ``None``) by its safe-stop command.
+
+        Hover, stop the wheels, hold the arm.
+        """
         for name in sorted(self.resources()) if resource is None else (resource,):
             method = self.safe_stops.get(name)
             if method is not None:
@@ -270,7 +273,10 @@ class BatteryOnboard(Onboard):
     __slots__ = ()
 
     def battery(self) -> Any:
-        """Latest battery-monitor sample (:class:`~marsupial.world.energy.BatteryStatus`: SOC %, V, A), ``None`` before one."""
+        """Latest battery-monitor sample (:class:`~marsupial.world.energy.BatteryStatus`: SOC %, V, A).
+
+        ``None`` before one.
+        """
         reading = self.sensor("battery").read()
         return None if reading is None else reading.data
 
@@ -320,7 +326,10 @@ class QuadrotorOnboard(BatteryOnboard):
 
     @property
     def thrust(self) -> float:
-        """Total rotor thrust (N) the flight controller commands (motor speeds through its rotor model); 0 with the motors off."""
+        """Total rotor thrust (N) the flight controller commands (motor speeds through its rotor model).
+
+        0 with the motors off.
+        """
         return float(self._robot.thrust) if self.motors_on else 0.0  # type: ignore[attr-defined]
 
     @property
@@ -517,7 +526,10 @@ class CarrierOnboard(WheeledOnboard):
         return R_fp.T @ (p_M - p_fp), R_fp.T @ R_M
 
     def arm_base_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """Estimated pose of frame M: the footprint estimate composed with M's mount in the URDF (position m, quaternion)."""
+        """Estimated pose of frame M.
+
+        The footprint estimate composed with M's mount in the URDF (position m, quaternion).
+        """
         estimate = self.estimate()
         p_M_fp, R_fp_M = self.arm_mount()
         R = estimate.rotation

@@ -58,13 +58,22 @@ class FlightParams(NodeParams):
     mode: Literal["reactive", "predictive"] = "predictive"
     """Tracking controller: ``reactive`` (PI on the measured platform, §3.3.1) or ``predictive`` (PI on the Kalman prediction, §3.3.2)."""
     gain_schedule: GainSchedule = "table1"
-    """PI gains K = Q·exp(-T·p_z): ``table1`` (T = 0.002 /m, the printed law, Table 1) or ``manual_fit`` (T fitted to K_p 0.45, K_i 0.1 at 4 m)."""
+    """PI gains K = Q·exp(-T·p_z).
+
+    ``table1`` (T = 0.002 /m, the printed law, Table 1) or ``manual_fit`` (T fitted to K_p 0.45, K_i 0.1 at 4 m).
+    """
     velocity_feedforward: bool = True
     """Predictive mode: add the Kalman filter's platform velocity to the PI output and keep that velocity in the estimate's frame when the optical flow changes surfaces (not in the paper; ``false``: the paper's predictive controller). The reactive controller has no filter and never uses it."""
     path_time_s: float | None = Field(None, ge=0.0)
-    """How far ahead the prediction is taken (s). Default: 0.1 s (§3.3.2) without the feed-forward, 0 with it (the feed-forward supplies the lead)."""
+    """How far ahead the prediction is taken (s).
+
+    Default: 0.1 s (§3.3.2) without the feed-forward, 0 with it (the feed-forward supplies the lead).
+    """
     integral_band: float = Field(0.1, gt=0.0)
-    """With the feed-forward: integrate the PI error only while it is within this distance (m), so that a large transient (e.g. the take-off) does not wind the integral up (not in the paper)."""
+    """With the feed-forward: integrate the PI error only while it is within this distance (m).
+
+    A large transient (e.g. the take-off) then does not wind the integral up (not in the paper).
+    """
     nominal_height: float = Field(4.0, gt=0.0)  # nominal tracking height, §3.1
     """Nominal tracking height above the platform (m), §3.1."""
     platform: Annotated[str, TeamMember(HasPlatform)] | None = None

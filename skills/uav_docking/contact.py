@@ -93,7 +93,10 @@ def contact_height(z0: float, t_c: float, k_c: float = K_C) -> float:
 
 
 class Contact(Skill["Contact.Params"]):
-    """After the operator's authorization, raise Part A to the UAV's Part B by eq. (15), then magnet and levers lock it."""
+    """After the operator's authorization, raise Part A to the UAV's Part B by eq. (15).
+
+    Then magnet and levers lock it.
+    """
 
     class Params(NodeParams):
         carrier: CarrierName = "carrier"
@@ -111,7 +114,10 @@ class Contact(Skill["Contact.Params"]):
         lost_timeout: float = Field(0.3, gt=0.0)
         """Time (s) without the marker, farther than ``blind_range``, that cancels the contact."""
         blind_timeout: float = Field(6.0, gt=0.0)
-        """Time (s) without the marker, within ``blind_range``, that cancels the contact (the estimates' drift since the last frame)."""
+        """Time (s) without the marker, within ``blind_range``, that cancels the contact.
+
+        It bounds the estimates' drift since the last frame.
+        """
         align_gap: float = Field(0.03, ge=0.0)
         """Gap (m) the approach holds until Part B is within ``align_tolerance`` of Part A's axis (no push on a misaligned UAV)."""
         align_tolerance: float = Field(0.008, gt=0.0)
@@ -224,7 +230,10 @@ class Contact(Skill["Contact.Params"]):
         return self.approach(state)
 
     def approach(self, state: TrackingState | None) -> Status:
-        """Eq. (15) on the standoff; at D_c (camera estimate) the magnet, on the contact switch the levers; cancel when blind too long."""
+        """Eq. (15) on the standoff; at D_c (camera estimate) the magnet, on the contact switch the levers.
+
+        Cancel when blind too long.
+        """
         p = self.params
         now = self.now
         p_B_A = state.p_B_A if state is not None else None

@@ -98,7 +98,10 @@ D_TEAM = 6.0  # m, D_team (§V-A): chosen — a room's reach indoors; flying it 
 
 
 class Explore(Skill["Explore.Params"]):
-    """Survey the rooms around the carrier with the UAV, stopping every D_e for a yaw sweep, within D_team of the carrier."""
+    """Survey the rooms around the carrier with the UAV, within D_team of the carrier.
+
+    The UAV stops every D_e for a yaw sweep.
+    """
 
     class Params(NodeParams):
         carrier: Annotated[str, TeamMember(HasBase)] = "carrier"
@@ -218,7 +221,10 @@ class Explore(Skill["Explore.Params"]):
         return Status.RUNNING
 
     def carrier_state(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """The carrier's position (m) and velocity (m/s) from its telemetry, extrapolated to now; ``None`` if too old."""
+        """The carrier's position (m) and velocity (m/s) from its telemetry, extrapolated to now.
+
+        ``None`` if too old.
+        """
         message = self.link.latest(self.params.carrier)
         if message is None or self.now - message.sent > self.params.link_timeout:
             return None
@@ -324,7 +330,10 @@ class Explore(Skill["Explore.Params"]):
 
     # -------------------------------------------------------- constraints
     def leash_radius(self, z: float, carrier_z: float) -> float:
-        """Horizontal distance (m) to the carrier the UAV is held within: D_team − margin, less the height difference."""
+        """Horizontal distance (m) to the carrier the UAV is held within.
+
+        D_team − margin, less the height difference.
+        """
         p = self.params
         limit = p.D_team - p.leash_margin
         dz = z - carrier_z

@@ -50,7 +50,10 @@ HOLD_HEIGHT = 0.30  # m: Part B above Part A of docking_ready; within its 0.35 m
 
 @dataclass(frozen=True)
 class HoldGains:
-    """Gains of the hold law: ``kp`` (1/s) on the position error, relative speed cap ``max_speed`` (m/s), ``k_yaw`` (1/s)."""
+    """Gains of the hold law.
+
+    ``kp`` (1/s) on the position error, relative speed cap ``max_speed`` (m/s), ``k_yaw`` (1/s).
+    """
 
     kp: float = 1.5
     max_speed: float = 0.5
@@ -187,7 +190,10 @@ def relative_pose_of(
 
 
 class RelativeHold(Skill["RelativeHold.Params"]):
-    """Hold the UAV at a pose in the carrier's manipulator frame M (above Part A), on the camera-anchored estimate of P_Q^M."""
+    """Hold the UAV at a pose in the carrier's manipulator frame M (above Part A).
+
+    The hold acts on the camera-anchored estimate of P_Q^M.
+    """
 
     class Params(NodeParams):
         carrier: CarrierName = "carrier"

@@ -119,7 +119,10 @@ class RelativePoseFilter:
         self.rejections = 0
 
     def rate_at(self, t: float) -> np.ndarray:
-        """The drift rate (m/s, N) at ``t``: zero once the last measurement is older than ``rate_horizon`` (no longer known)."""
+        """The drift rate (m/s, N) at ``t``.
+
+        Zero once the last measurement is older than ``rate_horizon`` (no longer known).
+        """
         return self.rate if t - self.t_ref <= self.rate_horizon else np.zeros(3)
 
     def drift(self, t: float) -> np.ndarray:

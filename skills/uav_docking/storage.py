@@ -52,7 +52,10 @@ class Store(Skill["Store.Params"]):
         uav: Annotated[str, TeamMember(Rotorcraft)] = "uav"
         """The UAV being stored (named in the ``stored`` event)."""
         arm_pose: str = "storage"
-        """Arm pose that stores the UAV (a name of the carrier's arm poses): over the rear deck, sensors clear (§IV-B)."""
+        """Arm pose that stores the UAV (a name of the carrier's arm poses).
+
+        Over the rear deck, sensors clear (§IV-B).
+        """
         tolerance: float = Field(ARM_TOLERANCE, gt=0.0)
         """Largest joint error (rad) at which the arm has arrived."""
 
