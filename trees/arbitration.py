@@ -48,7 +48,9 @@ class UnclaimedResourceError(RuntimeError):
 
 
 class Arbiter:
-    """Stamps commands per robot and resource with the tick and the node; drops a finishing node's on a resource taken over.
+    """Stamps commands per robot and resource with the tick and the node.
+
+    It drops a finishing node's commands on a resource taken over.
 
     The runner calls :meth:`new_tick` before every tree tick. Ticks count
     from 1; commands sent outside a tick (tick 0) are stamped too.

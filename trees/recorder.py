@@ -382,7 +382,10 @@ class Recorder:
 
     def _write_log(self, ns: int, level: int, message: str, name: str) -> None:
         self._write(
-            "/log", "foxglove.Log", ns, {"timestamp": foxglove_time(ns), "level": level, "message": message, "name": name}
+            "/log",
+            "foxglove.Log",
+            ns,
+            {"timestamp": foxglove_time(ns), "level": level, "message": message, "name": name},
         )
 
     # ------------------------------------------------------------ public logging
@@ -403,7 +406,9 @@ class Recorder:
             raise ValueError(f"unknown event kind '{kind}'; expected one of {', '.join(EVENT_KINDS)}{hint}")
         missing = [f for f in required if f not in fields]
         if missing:
-            raise ValueError(f"event '{kind}' needs the field(s) {', '.join(missing)}; got {', '.join(fields) or 'none'}")
+            raise ValueError(
+                f"event '{kind}' needs the field(s) {', '.join(missing)}; got {', '.join(fields) or 'none'}"
+            )
         self._write_event(t, kind, fields)
 
     def log_metric(self, t: float, name: str, value: float, **labels: Any) -> None:
@@ -448,7 +453,11 @@ class Recorder:
                 f"/{name}/pose",
                 POSE_SCHEMA,
                 ns,
-                {"timestamp": stamp, "frame_id": WORLD_FRAME, "pose": {"position": xyz(position), "orientation": xyzw(quaternion)}},
+                {
+                    "timestamp": stamp,
+                    "frame_id": WORLD_FRAME,
+                    "pose": {"position": xyz(position), "orientation": xyzw(quaternion)},
+                },
             )
         for name, (position, quaternion) in poses.items():
             translation, rotation = xyz(position), xyzw(quaternion)

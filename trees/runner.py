@@ -158,7 +158,9 @@ def build_world(mission: Mission, seed: int, gui: bool = False) -> World:
 
 def _located(mission: Mission, key_path: tuple[Any, ...], err: Exception) -> MissionError:
     if isinstance(err, UnknownNameError):
-        return mission.error_at(key_path, f"unknown {err.kind} '{err.name}'", one_of(err.known), suggest(err.name, err.known))
+        return mission.error_at(
+            key_path, f"unknown {err.kind} '{err.name}'", one_of(err.known), suggest(err.name, err.known)
+        )
     return mission.error_at(key_path, str(err))
 
 
@@ -314,11 +316,14 @@ def run_mission(
         mission = load_mission(mission, overrides)
     spec = mission.spec
     seed = spec.world.seed if seed is None else check_seed(seed)
-    if until is not None and not (isinstance(until, (int, float)) and not isinstance(until, bool) and 0 < until < math.inf):
+    if until is not None and not (
+        isinstance(until, (int, float)) and not isinstance(until, bool) and 0 < until < math.inf
+    ):
         raise MissionError(f"until {until!r} is not a time limit", expected="a finite number of simulated seconds > 0")
     if pace is not None and not (isinstance(pace, (int, float)) and not isinstance(pace, bool) and 0 < pace < math.inf):
-        raise MissionError(f"speed {pace!r} is not a pace",
-                           expected="a finite number of simulated seconds per second > 0")
+        raise MissionError(
+            f"speed {pace!r} is not a pace", expected="a finite number of simulated seconds per second > 0"
+        )
     if pace is None and (gui or operator_stdin):
         pace = 1.0  # a person watches or types
     until = spec.run.until if until is None else float(until)

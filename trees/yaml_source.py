@@ -121,9 +121,17 @@ def _build(loader: _Loader, node: yaml.Node, path: tuple[Any, ...], doc: SourceD
     budget[0] -= 1
     if budget[0] < 0 or len(path) > MAX_DEPTH:
         line, column = _position(node.start_mark)
-        what = f"more than {MAX_VALUES:,} values after alias expansion" if budget[0] < 0 else f"nested deeper than {MAX_DEPTH} levels"
+        what = (
+            f"more than {MAX_VALUES:,} values after alias expansion"
+            if budget[0] < 0
+            else f"nested deeper than {MAX_DEPTH} levels"
+        )
         raise MissionError(
-            f"document too large: {what}", doc.file, line, column, path,
+            f"document too large: {what}",
+            doc.file,
+            line,
+            column,
+            path,
             expected=f"at most {MAX_VALUES:,} values and {MAX_DEPTH} levels (a mission needs far fewer)",
         )
     if isinstance(node, yaml.MappingNode):
@@ -138,7 +146,11 @@ def _build(loader: _Loader, node: yaml.Node, path: tuple[Any, ...], doc: SourceD
                     line, column = _position(key_node.start_mark)
                     raise MissionError(
                         f"duplicate key '{key}' (first defined on line {first_line})",
-                        doc.file, line, column, path + (key,), expected="each key once per mapping",
+                        doc.file,
+                        line,
+                        column,
+                        path + (key,),
+                        expected="each key once per mapping",
                     )
                 seen[key] = key_node
         loader.flatten_mapping(node)  # resolve YAML merge keys (<<: *anchor)
@@ -173,7 +185,10 @@ def load_yaml(text: str, file: str = "<string>") -> SourceDoc:
         raise _parse_error(exc, doc.file) from None
     except RecursionError:  # the YAML composer recurses per nesting level
         raise MissionError(
-            f"document too large: nested deeper than {MAX_DEPTH} levels", doc.file, None, None,
+            f"document too large: nested deeper than {MAX_DEPTH} levels",
+            doc.file,
+            None,
+            None,
             expected=f"at most {MAX_DEPTH} levels of nesting",
         ) from None
     finally:

@@ -605,8 +605,9 @@ def onboard_of(robot: Robot) -> Onboard:
     return port
 
 
-def base_frame_offset(p_base: np.ndarray, q_base: np.ndarray, p_link: np.ndarray, q_link: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def base_frame_offset(
+    p_base: np.ndarray, q_base: np.ndarray, p_link: np.ndarray, q_link: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Position (m) and rotation of a link in its base frame, from the two world poses (model set-up only)."""
     R_base = rotation_matrix(q_base)
     return R_base.T @ (np.asarray(p_link) - np.asarray(p_base)), R_base.T @ rotation_matrix(q_link)
-

@@ -119,16 +119,27 @@ class Contact(Skill["Contact.Params"]):
         It bounds the estimates' drift since the last frame.
         """
         align_gap: float = Field(0.03, ge=0.0)
-        """Gap (m) the approach holds until Part B is within ``align_tolerance`` of Part A's axis (no push on a misaligned UAV)."""
+        """Gap (m) the approach holds until Part B is within ``align_tolerance`` of Part A's axis.
+
+        No push on a misaligned UAV.
+        """
         align_tolerance: float = Field(0.008, gt=0.0)
-        """Lateral offset (m) of Part B from Part A's axis within which the last ``align_gap`` is closed (inside the magnet's 10 mm reach)."""
+        """Lateral offset (m) of Part B from Part A's axis within which the last ``align_gap`` is closed.
+
+        It is inside the magnet's 10 mm reach.
+        """
         D_c: float = Field(0.010, gt=0.0)
-        """Estimated gap D_c (m) at which the electromagnet is switched on, §IV-C: its 10 mm reach (it closes the gap to 0 mm); a gap
-        the estimate reads short is caught by the capture retry."""
+        """Estimated gap D_c (m) at which the electromagnet is switched on, §IV-C.
+
+        Its 10 mm reach (it closes the gap to 0 mm); a gap the estimate reads short is caught by the capture retry.
+        """
         rest_gap: float = Field(0.005, ge=0.0)
         """Gap (m) at which Part A stops below Part B (inside D_c): the magnet, not the arm, makes the contact."""
         capture_step: float = Field(0.004, ge=0.0)
-        """After each failed capture the approach aims this much (m) higher (down to ``-2·capture_step`` below the estimated face)."""
+        """After each failed capture the approach aims this much (m) higher.
+
+        Down to ``-2·capture_step`` below the estimated face.
+        """
         sonar_cone: bool = True
         """Map the UAV's downward range-finder cone as a prohibited zone (§IV-B)."""
         timeout: float = Field(30.0, gt=0.0)
@@ -276,7 +287,9 @@ class Contact(Skill["Contact.Params"]):
         self.write(self.key, ContactTarget(standoff, self.cone))
         self.context.metric("contact_t", self.t_c, robot=self.robot_name)
         self.context.metric("contact_z_C", contact_height(self.z0, self.t_c, p.k_c), robot=self.robot_name)
-        self.feedback_message = f"{self.phase}: t_c {self.t_c:.1f} s, estimated gap {gap:.3f} m (target {standoff:.3f} m)"
+        self.feedback_message = (
+            f"{self.phase}: t_c {self.t_c:.1f} s, estimated gap {gap:.3f} m (target {standoff:.3f} m)"
+        )
         return Status.RUNNING
 
     def locked(self, state: TrackingState | None) -> Status:

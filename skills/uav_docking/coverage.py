@@ -309,8 +309,12 @@ class Blob:
     bottom: tuple[float, float]
 
 
-def detect_colour(rgb: np.ndarray, colour: tuple[int, int, int], min_pixels: int = 40, hue_tolerance: int = 6) -> Blob | None:
-    """The largest blob of pixels of ``colour`` (0-255 RGB, a saturated one) in an ``(h, w, 3)`` uint8 frame, or ``None``.
+def detect_colour(
+    rgb: np.ndarray, colour: tuple[int, int, int], min_pixels: int = 40, hue_tolerance: int = 6
+) -> Blob | None:
+    """The largest blob of pixels of ``colour`` in an ``(h, w, 3)`` uint8 frame, or ``None``.
+
+    ``colour`` is 0-255 RGB, a saturated one.
 
     A pixel matches when its OpenCV hue (0..180) is within ``hue_tolerance``
     of the colour's, its saturation at least 0.85 of the colour's (shading
@@ -338,7 +342,9 @@ def detect_colour(rgb: np.ndarray, colour: tuple[int, int, int], min_pixels: int
 def floor_point(
     K: np.ndarray, position: np.ndarray, R_nav_optical: np.ndarray, pixel: tuple[float, float], floor_z: float = 0.0
 ) -> np.ndarray | None:
-    """Where the ray through ``pixel`` (px) of a camera at ``position`` (m) meets the floor ``z = floor_z`` (m, nav frame).
+    """Where the ray through ``pixel`` (px) of a camera at ``position`` (m) meets the floor.
+
+    The floor is the plane ``z = floor_z`` (m, nav frame).
 
     ``None`` when the ray does not point down to the floor.
     """

@@ -146,7 +146,8 @@ class Deploy(Skill["Deploy.Params"]):
                 T_M_Q = self.T_M_Q_release = self.hand_over()
                 self.p_clear_M = T_M_Q[:3, 3] + np.array([0.0, 0.0, self.params.clearance])
                 self.yaw_clear_M = yaw_of_rotation(T_M_Q[:3, :3])
-                self.relative = relative_pose_of(self, self.carrier, since=self.now)  # the estimates after the hand-over
+                # the estimates after the hand-over
+                self.relative = relative_pose_of(self, self.carrier, since=self.now)
                 self.carrier.docking.release()
                 self.write(f"{self.params.carrier}/{UAV_STORED}", False)
                 self.write(f"{self.params.carrier}/{PART_B_YAW}", None)  # released: no UAV on Part A
@@ -183,7 +184,9 @@ class Deploy(Skill["Deploy.Params"]):
         state = self.relative.update(self.now)
         if state.T_M_Q is None:  # no telemetry since the hand-over yet: the UAV is where it was released
             state = RelativeState(self.now, self.T_M_Q_release)
-        error = command_hold(self.robot, state, self.p_clear_M, self.yaw_clear_M, CarrierFrame.of(self.carrier), self.gains)
+        error = command_hold(
+            self.robot, state, self.p_clear_M, self.yaw_clear_M, CarrierFrame.of(self.carrier), self.gains
+        )
         if error is None:
             self.feedback_message = "waiting for the UAV's estimate over the team link"
             return Status.RUNNING

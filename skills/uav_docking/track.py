@@ -149,7 +149,10 @@ class Track(Skill["Track.Params"]):
         carrier: CarrierName = "carrier"
         """Team member carrying the arm and its eye-in-hand camera (a mobile_manipulator)."""
         standoff: float = Field(0.40, ge=0.2, le=1.2)
-        """Camera-to-tag-plate distance (m) of the tracking target P_VS (chosen: the bundle fills the view, all tags found at 320×240)."""
+        """Camera-to-tag-plate distance (m) of the tracking target P_VS.
+
+        Chosen: the bundle fills the view, all tags found at 320×240.
+        """
         part_b_M: tuple[float, float, float] = (0.20, 0.0, 0.80)
         """Part B's position (m) in M held by the UAV.
 
@@ -163,7 +166,10 @@ class Track(Skill["Track.Params"]):
         ee_yaw_M: float = 0.0
         """End-effector heading in M (rad) of the PBVS target (0: joint 6 mid-range at ``docking_ready``)."""
         hold_kp: float = Field(2.5, gt=0.0)
-        """Position gain of the UAV's hold in M (1/s; chosen: the stiffest without overshoot at 20 Hz, 3 cm RMS in 2 m/s gusts)."""
+        """Position gain of the UAV's hold in M (1/s).
+
+        Chosen: the stiffest without overshoot at 20 Hz, 3 cm RMS in 2 m/s gusts.
+        """
         hold_speed: float = Field(1.0, gt=0.0, le=4.0)
         """Largest UAV speed relative to the carrier while it takes its hold pose (m/s)."""
         max_age: float = Field(0.2, gt=0.0)
@@ -191,11 +197,17 @@ class Track(Skill["Track.Params"]):
         This covers the arm's lag.
         """
         fusion_gain: float = Field(0.8, gt=0.0, le=1.0)
-        """Weight of each eye-in-hand measurement in the UAV pose estimate (:class:`~.relative_pose.RelativePoseFilter`; the
-        camera is precise to millimetres at tracking range, the UAV's odometry over the carrier is not: 2.3 cm RMS of P_Q^M
-        against truth at 0.8 in a 25 s encounter, 6.3 cm at 0.3)."""
+        """Weight of each eye-in-hand measurement in the UAV pose estimate.
+
+        See :class:`~.relative_pose.RelativePoseFilter`. The camera is precise to millimetres at tracking range, the
+        UAV's odometry over the carrier is not: 2.3 cm RMS of P_Q^M against truth at 0.8 in a 25 s encounter, 6.3 cm
+        at 0.3.
+        """
         fusion_gate: float = Field(0.03, gt=0.0)
-        """Measurements farther than this (m) from the predicted pose are outliers (:class:`~.relative_pose.RelativePoseFilter`)."""
+        """Measurements farther than this (m) from the predicted pose are outliers.
+
+        See :class:`~.relative_pose.RelativePoseFilter`.
+        """
         vision_fixes: bool = False
         """Send each accepted camera frame to the UAV's estimator as an external vision fix (opt-in: measured worse)."""
         f_B: float = Field(4.0, gt=0.0)
