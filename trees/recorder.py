@@ -349,7 +349,7 @@ class Recorder:
         data = encode(payload)
         self._busy = True
         try:
-            for sink, channel in zip(self._sinks, self._channel(topic, schema_name)):
+            for sink, channel in zip(self._sinks, self._channel(topic, schema_name), strict=True):
                 sink.write(channel, ns, data)
         finally:
             self._busy = False
@@ -519,7 +519,7 @@ class Recorder:
                 "previous_status": STATUS_NAMES[before],
                 "current_status": STATUS_NAMES[now],
             }
-            for uid, (node, before, now) in enumerate(zip(nodes, track.statuses, statuses), start=1)
+            for uid, (node, before, now) in enumerate(zip(nodes, track.statuses, statuses, strict=True), start=1)
             if before is not now
         ]
         track.statuses = statuses

@@ -31,6 +31,7 @@ Plain numpy/OpenCV on a plan-view grid of the mission's building plan
 from __future__ import annotations
 
 import heapq
+import itertools
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -208,7 +209,7 @@ def truncate(points: np.ndarray, length: float) -> np.ndarray:
     """The polyline ``(n, 2)`` cut at arc length ``length`` (m) (the whole polyline if shorter)."""
     out = [points[0]]
     left = length
-    for a, b in zip(points[:-1], points[1:]):
+    for a, b in itertools.pairwise(points):
         segment = float(np.linalg.norm(b - a))
         if segment >= left:
             out.append(a + (b - a) * (left / segment if segment > 0 else 0.0))

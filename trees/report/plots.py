@@ -77,7 +77,8 @@ def _footprint(kind: str, primitive: Mapping[str, Any]) -> tuple[Any, list[float
         hx, hy = size["x"] / 2, size["y"] / 2
         corners = [(p["x"] + c * dx - s * dy, p["y"] + s * dx + c * dy) for dx, dy in
                    ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy))]
-        return Polygon(corners, closed=True, facecolor=face, edgecolor="#444", lw=0.5), *map(list, zip(*corners))
+        xs, ys = (list(axis) for axis in zip(*corners, strict=True))
+        return Polygon(corners, closed=True, facecolor=face, edgecolor="#444", lw=0.5), xs, ys
     r = size["x"] / 2
     return (Circle((p["x"], p["y"]), r, facecolor=face, edgecolor="#444", lw=0.5),
             [p["x"] - r, p["x"] + r], [p["y"] - r, p["y"] + r])
