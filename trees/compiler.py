@@ -111,6 +111,7 @@ class _Compiler:
 
     # ---------------------------------------------------------------- build
     def build(self, node: Any) -> Behaviour:  # a node model of the mission (its fields by kind)
+        """The py_trees behaviour of a mission node, its children built and its names made unique."""
         kind = node.kind
         if kind in ("skill", "condition"):
             return self.leaf(kind, getattr(node, kind), node.robot, node.params, node, node.name)
@@ -119,6 +120,12 @@ class _Compiler:
         if kind in WAITING_KINDS:
             return build_waiting(self, node)
         name = self.unique(node.name or kind)
+        if kind in ("sequence", "selector", "parallel", "priorities"):
+            return self.composite(kind, name, node)
+        return self.decorator(kind, name, node)
+
+    def composite(self, kind: str, name: str, node: Any) -> Behaviour:
+        """A ``sequence``, ``selector``, ``parallel`` or ``priorities`` node named ``name``, its children built."""
         if kind == "sequence":
             return py_trees.composites.Sequence(
                 name, memory=node.memory, children=[self.build(c) for c in node.sequence]
@@ -130,8 +137,10 @@ class _Compiler:
         if kind == "parallel":
             policy = ParallelPolicy.SuccessOnAll() if node.success_on == "all" else ParallelPolicy.SuccessOnOne()
             return py_trees.composites.Parallel(name, policy=policy, children=self.parallel_branches(node.parallel))
-        if kind == "priorities":
-            return Priorities(name, [self.entry(e) for e in node.priorities], self.context)
+        return Priorities(name, [self.entry(e) for e in node.priorities], self.context)
+
+    def decorator(self, kind: str, name: str, node: Any) -> Behaviour:
+        """A ``repeat``, ``retry``, ``timeout``, ``invert`` or ``until`` node named ``name``, its child built."""
         if kind == "repeat":
             return py_trees.decorators.Repeat(name, self.build(node.repeat), num_success=node.times)
         if kind == "retry":
