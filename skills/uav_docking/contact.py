@@ -251,10 +251,9 @@ class Contact(Skill["Contact.Params"]):
         gap = float(p_B_A[2]) if p_B_A is not None else math.inf
         if state is None or p_B_A is None:
             return self.cancel("no estimate of Part B")
-        if not state.seen and state.age() > (p.blind_timeout if gap <= p.blind_range else p.lost_timeout):
-            return self.cancel(f"marker lost {gap:.2f} m from Part B ({state.age():.1f} s unseen)")
-        if self.t0 is not None and now - self.t0 > p.timeout:  # t0: set when the approach began
-            return self.cancel(f"no lock after {p.timeout:.0f} s of approach")
+        reason = self.cancel_reason(state, gap)
+        if reason is not None:
+            return self.cancel(reason)
         lateral = math.hypot(float(p_B_A[0]), float(p_B_A[1]))
         aligned = lateral <= p.align_tolerance
         if aligned or self.s0 - p.k_c * math.log(self.t_c + 1.0) > p.align_gap:  # the contact clock t_c
@@ -291,6 +290,15 @@ class Contact(Skill["Contact.Params"]):
             f"{self.phase}: t_c {self.t_c:.1f} s, estimated gap {gap:.3f} m (target {standoff:.3f} m)"
         )
         return Status.RUNNING
+
+    def cancel_reason(self, state: TrackingState, gap: float) -> str | None:
+        """Why the approach stops now (marker unseen too long at this ``gap`` in m, no lock in time), else ``None``."""
+        p = self.params
+        if not state.seen and state.age() > (p.blind_timeout if gap <= p.blind_range else p.lost_timeout):
+            return f"marker lost {gap:.2f} m from Part B ({state.age():.1f} s unseen)"
+        if self.t0 is not None and self.now - self.t0 > p.timeout:  # t0: set when the approach began
+            return f"no lock after {p.timeout:.0f} s of approach"
+        return None
 
     def locked(self, state: TrackingState | None) -> Status:
         """Docked: record the contact time t_c and the docking time (from the start of tracking), succeed."""
