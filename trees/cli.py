@@ -278,29 +278,33 @@ def skills(names: tuple[str, ...]) -> None:
         if names and name not in names:
             continue
         for provider in providers:
-            title = Text.assemble(f"{kind} ", (name, "bold"), f"  from {provider.distribution}: {provider.target}")
-            table = Table(title=title, title_justify="left")
-            for column in ("parameter", "type", "default", "description"):
-                table.add_column(column)
             try:
                 cls = registry.resolve(kind, name) if len(providers) == 1 else _load(provider.target)
             except MissionError as err:
                 console.print(Text.assemble(f"{kind} {name} ({provider}): ", (str(err), "red")))
                 continue
-            needs = ", ".join(c.__name__ for c in cls.robot_kinds or ())
-            kinds = "no robot" if not cls.uses_robot else needs or "any robot"
-            primary = f" Primary: {cls.primary}." if getattr(cls, "primary", None) else ""
-            table.caption = Text(f"{cls.summary()} Robots: {kinds}.{primary}")
-            table.caption_justify = "left"
-            for field_name, info in cls.Params.model_fields.items():
-                default = "(required)" if info.is_required() else repr(info.default)
-                table.add_row(
-                    *(Text(cell) for cell in (field_name, _type_text(info.annotation), default, info.description or ""))
-                )
-            for port, keys in (("reads", cls.reads), ("writes", cls.writes)):
-                if keys:
-                    table.add_row(Text(port, "dim"), "blackboard", Text(", ".join(keys)), "")
-            console.print(table)
+            title = Text.assemble(f"{kind} ", (name, "bold"), f"  from {provider.distribution}: {provider.target}")
+            console.print(_node_table(title, cls))
+
+
+def _node_table(title: Text, cls: Any) -> Table:
+    """The ``skills`` table of one node class: its parameters, blackboard ports, summary and robots."""
+    table = Table(title=title, title_justify="left")
+    for column in ("parameter", "type", "default", "description"):
+        table.add_column(column)
+    needs = ", ".join(c.__name__ for c in cls.robot_kinds or ())
+    kinds = "no robot" if not cls.uses_robot else needs or "any robot"
+    primary = f" Primary: {cls.primary}." if getattr(cls, "primary", None) else ""
+    table.caption = Text(f"{cls.summary()} Robots: {kinds}.{primary}")
+    table.caption_justify = "left"
+    for field_name, info in cls.Params.model_fields.items():
+        default = "(required)" if info.is_required() else repr(info.default)
+        cells = (field_name, _type_text(info.annotation), default, info.description or "")
+        table.add_row(*(Text(cell) for cell in cells))
+    for port, keys in (("reads", cls.reads), ("writes", cls.writes)):
+        if keys:
+            table.add_row(Text(port, "dim"), "blackboard", Text(", ".join(keys)), "")
+    return table
 
 
 @cli.command()
