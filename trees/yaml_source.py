@@ -113,6 +113,32 @@ def _is_group_merge(key_node: yaml.Node, value_node: yaml.Node) -> bool:
     )
 
 
+def _check_keys(loader: _Loader, node: yaml.MappingNode, path: tuple[Any, ...], doc: SourceDoc) -> None:
+    """Raise :class:`MissionError` at a key given twice in the mapping ``node`` (before YAML merges are resolved).
+
+    A ``<<: "${group}"`` entry gets a plain string key: it merges a parameter group later (trees/subtrees.py).
+    """
+    seen: dict[Any, yaml.Node] = {}
+    for key_node, value_node in node.value:
+        if _is_group_merge(key_node, value_node):
+            key_node.tag = "tag:yaml.org,2002:str"  # <<: "${group}" merges a parameter later (trees/subtrees.py)
+        if not isinstance(key_node, yaml.ScalarNode):
+            continue
+        key = "<<" if key_node.tag == _MERGE_TAG else loader.construct_object(key_node)
+        if key in seen and (key != "<<" or key_node.tag == seen[key].tag == "tag:yaml.org,2002:str"):
+            first_line = seen[key].start_mark.line + 1
+            line, column = _position(key_node.start_mark)
+            raise MissionError(
+                f"duplicate key '{key}' (first defined on line {first_line})",
+                doc.file,
+                line,
+                column,
+                path + (key,),
+                expected="each key once per mapping",
+            )
+        seen[key] = key_node
+
+
 def _build(loader: _Loader, node: yaml.Node, path: tuple[Any, ...], doc: SourceDoc, budget: list[int]) -> Any:
     """Plain value of ``node``, recording positions under ``path``; duplicate keys are errors.
 
@@ -135,24 +161,7 @@ def _build(loader: _Loader, node: yaml.Node, path: tuple[Any, ...], doc: SourceD
             expected=f"at most {MAX_VALUES:,} values and {MAX_DEPTH} levels (a mission needs far fewer)",
         )
     if isinstance(node, yaml.MappingNode):
-        seen: dict[Any, yaml.Node] = {}
-        for key_node, value_node in node.value:
-            if _is_group_merge(key_node, value_node):
-                key_node.tag = "tag:yaml.org,2002:str"  # <<: "${group}" merges a parameter later (trees/subtrees.py)
-            if isinstance(key_node, yaml.ScalarNode):
-                key = "<<" if key_node.tag == _MERGE_TAG else loader.construct_object(key_node)
-                if key in seen and (key != "<<" or key_node.tag == seen[key].tag == "tag:yaml.org,2002:str"):
-                    first_line = seen[key].start_mark.line + 1
-                    line, column = _position(key_node.start_mark)
-                    raise MissionError(
-                        f"duplicate key '{key}' (first defined on line {first_line})",
-                        doc.file,
-                        line,
-                        column,
-                        path + (key,),
-                        expected="each key once per mapping",
-                    )
-                seen[key] = key_node
+        _check_keys(loader, node, path, doc)
         loader.flatten_mapping(node)  # resolve YAML merge keys (<<: *anchor)
         result: dict[Any, Any] = {}
         for key_node, value_node in node.value:
