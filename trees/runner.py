@@ -472,8 +472,11 @@ def _loop(
         display.update(world, tree, wall, paused)
 
 
-def _log_poses(recorder: Recorder | None, world: World, now: float, due: float) -> float:
-    """Log every robot's true and estimated pose if the pose period is ``due`` at ``now`` (s); the next due time."""
+def _log_poses(recorder: Any, world: World, now: float, due: float) -> float:
+    """Log every robot's true and estimated pose if the pose period is ``due`` at ``now`` (s); the next due time.
+
+    ``recorder`` is the run context's (a :class:`Recorder` or ``None``).
+    """
     if recorder is None or now + 1e-9 < due:
         return due
     recorder.log_robot_poses(
