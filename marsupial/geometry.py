@@ -8,12 +8,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import TypeAlias, Union
+from typing import TypeAlias
 
 import numpy as np
 
 #: a vector argument: a sequence of floats or a numpy array (m, rad, as the parameter says)
-Vector: TypeAlias = Union[Sequence[float], np.ndarray]
+Vector: TypeAlias = Sequence[float] | np.ndarray
 
 
 def rotation_matrix(quaternion: Vector) -> np.ndarray:

@@ -77,7 +77,10 @@ class EstimateHistory:
         self.samples: deque[Any] = deque()
 
     def add(self, estimate: Any | None) -> None:
-        """Keep ``estimate`` (ignored if ``None`` or not newer than the last one); forget those older than the window."""
+        """Keep ``estimate`` (ignored if ``None`` or not newer than the last one).
+
+        Forget those older than the window.
+        """
         if estimate is None or (self.samples and estimate.stamp <= self.samples[-1].stamp):
             return
         self.samples.append(estimate)

@@ -279,7 +279,9 @@ def local_plan(
     free = np.where(first == len(times), np.inf, v * t_free)
     braking = v**2 / (2.0 * settings.max_accel) + v * settings.reaction
     clearance = np.minimum(clearance_k.min(axis=1), now)
-    slow_enough = v <= settings.creep_speed + settings.speed_per_clearance * np.maximum(clearance - settings.margin, 0.0)
+    slow_enough = v <= settings.creep_speed + settings.speed_per_clearance * np.maximum(
+        clearance - settings.margin, 0.0
+    )
     admissible = np.where(v > 1e-9, (free >= braking) & slow_enough, ~colliding.any(axis=1))
     if not admissible.any():
         return LocalPlan(0.0, 0.0, now, 0.0)
@@ -366,9 +368,15 @@ class Navigate(Skill["Navigate.Params"]):
 
     class Params(NodeParams):
         path: str | list[Annotated[list[float], Field(min_length=2, max_length=2)]] | None = "operator_path"
-        """Guide path γ_mm (§V-A): a path of the mission's building plan or [x, y] way-points (m, navigation frame); none: set-points only."""
+        """Guide path γ_mm (§V-A): a path of the mission's building plan or [x, y] way-points (m, navigation frame).
+
+        None: set-points only.
+        """
         setpoints_key: str | None = None
-        """Blackboard key of operator set-points ([x, y] or a list of them, m, navigation frame, §V-B); they replace the path."""
+        """Blackboard key of operator set-points ([x, y] or a list of them, m, navigation frame, §V-B).
+
+        They replace the path.
+        """
         max_speed: float = Field(MAX_SPEED, gt=0.0, le=MAX_SPEED)
         """Speed limit (m/s): 2 m/s, UGV longitudinal limit (§V-B-1)."""
         docking_speed: float = Field(DOCKING_SPEED, gt=0.0)
@@ -382,7 +390,10 @@ class Navigate(Skill["Navigate.Params"]):
         goal_tolerance: float = Field(0.3, gt=0.0)
         """Distance (m) to the path's end at which it is reached."""
         footprint: tuple[float, float, float] = (0.25, 0.25, 0.2)
-        """Front, rear, half-width (m) of the robot's rectangle about ``base_footprint`` (Pioneer 3-DX: 0.455 × 0.381 m)."""
+        """Front, rear, half-width (m) of the robot's rectangle about ``base_footprint``.
+
+        Pioneer 3-DX: 0.455 × 0.381 m.
+        """
         margin: float = Field(0.15, ge=0.0)
         """Clearance (m) kept from LiDAR echoes (chosen)."""
         sensor_range: float = Field(5.0, gt=0.0)
@@ -422,7 +433,11 @@ class Navigate(Skill["Navigate.Params"]):
         elif path is None:
             return None
         else:
-            guide = self.context.prior("building_plan").path(path) if isinstance(path, str) else np.asarray(path, dtype=float)
+            guide = (
+                self.context.prior("building_plan").path(path)
+                if isinstance(path, str)
+                else np.asarray(path, dtype=float)
+            )
         follower = PathFollower(guide, self.params.smoothing)
         follower.update(here, window=follower.length)
         return follower

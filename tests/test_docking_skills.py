@@ -17,8 +17,8 @@ from py_trees.composites import Parallel, Sequence
 from skill_harness import Harness
 
 from marsupial.skills.uav_docking.contact import K_C, Contact, contact_height
-from marsupial.skills.uav_docking.rendezvous import Rendezvous
 from marsupial.skills.uav_docking.relative_pose import RelativePoseFilter
+from marsupial.skills.uav_docking.rendezvous import Rendezvous
 from marsupial.skills.uav_docking.selection import rot_z
 from marsupial.skills.uav_docking.track import Track, TrackingState, sonar_cone_zones
 from marsupial.skills.uav_docking.zones import ZoneMap

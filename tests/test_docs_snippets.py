@@ -142,7 +142,9 @@ def _check_yaml(page: Path, line: int, body: str, mark: str, scratch: Path, pins
         loaded = parse_mission(text, where)
         build_world(loaded, loaded.spec.world.seed).close()
     else:
-        assert isinstance(data, dict) and "mission" in data, f"{where}: a yaml snippet that is not a mission needs a mark"
+        assert isinstance(data, dict) and "mission" in data, (
+            f"{where}: a yaml snippet that is not a mission needs a mark"
+        )
         compile_mission(parse_mission(_mission(body, pins), where, path=scratch / "missions" / "snippet.yaml"))
 
 
@@ -179,5 +181,7 @@ def test_the_conventions_are_recognised():
         ```
     """)
     assert [(lang, mark) for m in _FENCE.finditer(page) for lang, mark in [(m["lang"], m["mark"])]] == [
-        ("yaml", "fragment: node"), ("python", None)]
+        ("yaml", "fragment: node"),
+        ("python", None),
+    ]
     assert sum(len(snippets(p)) for p in PAGES) > 40

@@ -5,7 +5,6 @@ from pathlib import Path
 import pytest
 import yaml
 
-from marsupial.trees.mission import loading as mission_module
 from marsupial.trees.errors import MissionError
 from marsupial.trees.mission import (
     ConditionNode,
@@ -26,6 +25,7 @@ from marsupial.trees.mission import (
     mission_schema,
     parse_mission,
 )
+from marsupial.trees.mission import loading as mission_module
 from marsupial.trees.yaml_source import load_yaml, parse_scalar
 
 DATA = Path(__file__).parent / "data" / "missions"

@@ -14,6 +14,7 @@ import textwrap
 import pytest
 from click.testing import CliRunner
 from py_trees.common import Status
+from skill_harness import Harness
 
 from marsupial.trees.arbitration import Arbiter, UnclaimedResourceError
 from marsupial.trees.cli import cli
@@ -22,8 +23,6 @@ from marsupial.trees.skill import Skill
 from marsupial.world import World
 from marsupial.world.capabilities import Carrier, HasBase, Rotorcraft, provides
 from marsupial.world.onboard import CarrierOnboard, QuadrotorOnboard
-
-from skill_harness import Harness
 
 TEAM = """\
 mission: m

@@ -18,13 +18,12 @@ from pathlib import Path
 
 import py_trees
 import pytest
+from truth_trap import truth_trap
 
 import marsupial.missions
 import marsupial.skills
 import marsupial.trees
 from marsupial.trees.runner import run_mission
-
-from truth_trap import truth_trap
 
 SKILLS_DIR = Path(marsupial.skills.__file__).resolve().parent
 CONDITIONS = Path(marsupial.trees.__file__).resolve().parent / "conditions.py"
@@ -131,10 +130,10 @@ def test_shipped_mission_decides_without_truth(mission: str) -> None:
 
 
 def test_the_trap_catches_a_truth_read_from_a_skill() -> None:
+    from skill_harness import Harness
+
     from marsupial.trees.skill import Skill
     from marsupial.world import World
-
-    from skill_harness import Harness
 
     class Cheat(Skill):
         """Reads the body's true pose through the interface's private slot (what the trap must catch)."""

@@ -5,7 +5,6 @@ from pathlib import Path
 import pytest
 
 import marsupial.missions
-
 from marsupial.trees.errors import MissionError
 from marsupial.trees.mission import SequenceNode, SkillNode, display_path, load_mission, parse_mission
 from marsupial.trees.subtrees import known_subtrees, resolve_references

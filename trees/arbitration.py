@@ -48,7 +48,9 @@ class UnclaimedResourceError(RuntimeError):
 
 
 class Arbiter:
-    """Stamps commands per robot and resource with the tick and the node; drops a finishing node's on a resource taken over.
+    """Stamps commands per robot and resource with the tick and the node.
+
+    It drops a finishing node's commands on a resource taken over.
 
     The runner calls :meth:`new_tick` before every tree tick. Ticks count
     from 1; commands sent outside a tick (tick 0) are stamped too.
@@ -193,7 +195,10 @@ class CommandPort:
         return result
 
     def safe_stop(self) -> Stamp | None:
-        """Arbitrated safe stop of the resources of this robot the node claims; the stamp that kept one, else ``None``."""
+        """Arbitrated safe stop of the resources of this robot the node claims.
+
+        The stamp that kept one, else ``None``.
+        """
         node, robot = self._node, self._onboard.name
         resources = [r for r in sorted(self._onboard.resources()) if node.may_command(robot, r)]
         kept = self._arbiter.safe_stop(self._onboard, node.node_id, node.name, resources)

@@ -153,7 +153,12 @@ def _builtin(node: Behaviour) -> tuple[str, dict[str, Any]] | None:
     tag = getattr(type(node), "btcpp_tag", None)
     if tag:
         return str(tag), _ports(node)
-    c, d, b = py_trees.composites, py_trees.decorators, py_trees.behaviours
+    return _builtin_control(node) or _builtin_decorator(node) or _builtin_leaf(node)
+
+
+def _builtin_control(node: Behaviour) -> tuple[str, dict[str, Any]] | None:
+    """The BehaviorTree.CPP control node (tag, ports) of a py_trees sequence, selector or parallel, else ``None``."""
+    c = py_trees.composites
     if isinstance(node, c.Sequence):
         return ("Sequence" if node.memory else "ReactiveSequence"), {}
     if isinstance(node, c.Selector):
@@ -167,6 +172,12 @@ def _builtin(node: Behaviour) -> tuple[str, dict[str, Any]] | None:
         else:
             success = -1
         return "Parallel", {"success_count": success, "failure_count": 1}
+    return None
+
+
+def _builtin_decorator(node: Behaviour) -> tuple[str, dict[str, Any]] | None:
+    """The BehaviorTree.CPP decorator (tag, ports) of a py_trees decorator, else ``None``."""
+    d = py_trees.decorators
     if isinstance(node, d.Inverter):
         return "Inverter", {}
     if isinstance(node, d.Repeat):
@@ -181,6 +192,12 @@ def _builtin(node: Behaviour) -> tuple[str, dict[str, Any]] | None:
         return "ForceFailure", {}
     if isinstance(node, d.OneShot):
         return "RunOnce", {"then_skip": False}
+    return None
+
+
+def _builtin_leaf(node: Behaviour) -> tuple[str, dict[str, Any]] | None:
+    """``AlwaysSuccess`` or ``AlwaysFailure`` for py_trees' plain success and failure leaves, else ``None``."""
+    b = py_trees.behaviours
     if type(node) is b.Success:
         return "AlwaysSuccess", {}
     if type(node) is b.Failure:

@@ -173,7 +173,8 @@ def plan_trials(
         raise MissionError(f"unknown log policy '{keep_logs}'", expected=f"one of {', '.join(KEEP_LOGS)}")
     overrides = dict(overrides or {})
     keys = list(vary or {})
-    combos = [dict(zip(keys, values)) for values in itertools.product(*(list((vary or {})[k]) for k in keys))]
+    grid = itertools.product(*(list((vary or {})[k]) for k in keys))
+    combos = [dict(zip(keys, values, strict=True)) for values in grid]
     for combo in combos:
         compile_mission(load_mission(mission, {**overrides, **combo}))
     plan: list[Trial] = []
@@ -279,10 +280,7 @@ def run_campaign(
             failures += 0 if record["success"] else 1
             bar.update(task, advance=1, description=f"{mission} ({backend}, {failures} failed)")
 
-        if backend == "local":
-            records = _run_local(plan, workers, done)
-        else:
-            records = _run_ray(plan, workers, address, out, done)
+        records = _run_local(plan, workers, done) if backend == "local" else _run_ray(plan, workers, address, out, done)
     records.sort(key=lambda r: r["trial"])
     summary = {
         "mission": mission,

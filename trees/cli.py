@@ -43,7 +43,8 @@ def bad_input() -> Iterator[None]:
     try:
         yield
     except (MissionError, WorldError, LogError) as err:
-        _err.print(Text.assemble(("error:", "bold red"), " ", str(err)), highlight=False, soft_wrap=True)  # literal text
+        # literal text
+        _err.print(Text.assemble(("error:", "bold red"), " ", str(err)), highlight=False, soft_wrap=True)
         raise SystemExit(2) from None
 
 
@@ -94,7 +95,13 @@ def _positive_speed(ctx: click.Context, param: click.Parameter, value: float | N
     return value
 
 
-_set_option = click.option("--set", "sets", multiple=True, metavar="KEY=VALUE", help="Override a mission value (params.X, world.seed, run.until …).")
+_set_option = click.option(
+    "--set",
+    "sets",
+    multiple=True,
+    metavar="KEY=VALUE",
+    help="Override a mission value (params.X, world.seed, run.until …).",
+)
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -106,24 +113,48 @@ def cli() -> None:
 @cli.command()
 @click.argument("mission", required=False, default=DEFAULT_MISSION)
 @click.option("--seed", type=SEED, help="World seed, an integer >= 0 (default: the mission's world.seed).")
-@click.option("--log", "log_path", type=click.Path(dir_okay=False),
-              help="Write the run to this MCAP file (default: runs/<mission>-<UTC time>.mcap).")
+@click.option(
+    "--log",
+    "log_path",
+    type=click.Path(dir_okay=False),
+    help="Write the run to this MCAP file (default: runs/<mission>-<UTC time>.mcap).",
+)
 @click.option("--no-log", is_flag=True, help="Write no log file.")
 @click.option("--until", type=float, callback=_positive_time, help="Time limit in simulated seconds (> 0).")
 @click.option("--gui", is_flag=True, help="Open the pybullet GUI (paced to real time).")
 @_set_option
-@click.option("--operator", is_flag=True, help="Read operator commands from stdin ('command [reason]' per line); real-time pace.")
+@click.option(
+    "--operator", is_flag=True, help="Read operator commands from stdin ('command [reason]' per line); real-time pace."
+)
 @click.option("--record-images", is_flag=True, help="Record camera frames that skills log.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress line and no summary table.")
 @click.option("--live", is_flag=True, help="Serve the run to Foxglove over WebSocket while it runs (real-time pace).")
 @click.option("--host", help="Address the live server binds to (default: 127.0.0.1, this machine only).")
-@click.option("--port", type=click.IntRange(0, 65535),
-              help="Port of the live server (default: 8765; 0: any free port).")
-@click.option("--speed", type=float, callback=_positive_speed,
-              help="Pace the run to X times real time (default: 1 with --live/--gui/--operator, else at full speed).")
-def run(mission: str, seed: int | None, log_path: str | None, no_log: bool, until: float | None, gui: bool,
-        sets: tuple[str, ...], operator: bool, record_images: bool, quiet: bool, live: bool, host: str | None,
-        port: int | None, speed: float | None) -> None:
+@click.option(
+    "--port", type=click.IntRange(0, 65535), help="Port of the live server (default: 8765; 0: any free port)."
+)
+@click.option(
+    "--speed",
+    type=float,
+    callback=_positive_speed,
+    help="Pace the run to X times real time (default: 1 with --live/--gui/--operator, else at full speed).",
+)
+def run(
+    mission: str,
+    seed: int | None,
+    log_path: str | None,
+    no_log: bool,
+    until: float | None,
+    gui: bool,
+    sets: tuple[str, ...],
+    operator: bool,
+    record_images: bool,
+    quiet: bool,
+    live: bool,
+    host: str | None,
+    port: int | None,
+    speed: float | None,
+) -> None:
     """Run MISSION (a name or a .yaml path; default: usar_docking, the USAR docking mission).
 
     The run is logged to runs/<mission>-<UTC time>.mcap unless --log FILE or
@@ -146,8 +177,16 @@ def run(mission: str, seed: int | None, log_path: str | None, no_log: bool, unti
             if live:
                 sinks.append(_live_sink(host or DEFAULT_HOST, DEFAULT_PORT if port is None else port))
             result = run_mission(
-                loaded, seed=seed, log_path=log, until=until, gui=gui, progress=not quiet, operator_stdin=operator,
-                record_images=record_images, pace=speed if speed is not None else 1.0 if live else None, sinks=sinks,
+                loaded,
+                seed=seed,
+                log_path=log,
+                until=until,
+                gui=gui,
+                progress=not quiet,
+                operator_stdin=operator,
+                record_images=record_images,
+                pace=speed if speed is not None else 1.0 if live else None,
+                sinks=sinks,
             )
     except KeyboardInterrupt:  # before the run loop took over the signal
         sys.exit(130)
@@ -168,8 +207,10 @@ def _live_sink(host: str, port: int) -> Any:
     try:
         sink = LiveSink(host, port)
     except RuntimeError as err:  # the SDK raises it for a port in use or an address it cannot bind
-        raise MissionError(f"--live: cannot serve on {host}:{port} ({err})",
-                           expected="a free port (--port) on an address of this machine (--host)") from None
+        raise MissionError(
+            f"--live: cannot serve on {host}:{port} ({err})",
+            expected="a free port (--port) on an address of this machine (--host)",
+        ) from None
     where = "this machine only" if host in (DEFAULT_HOST, "localhost", "::1") else f"open to the network on {host}"
     click.echo(f"live: Foxglove WebSocket on {sink.url} ({where}); in Foxglove: Open connection > Foxglove WebSocket")
     sys.stdout.flush()
@@ -228,32 +269,42 @@ def skills(names: tuple[str, ...]) -> None:
     with bad_input():
         for wanted in names:
             if wanted not in available:
-                raise MissionError(f"unknown skill or condition '{wanted}'", expected=one_of(available), suggestion=suggest(wanted, available))
+                raise MissionError(
+                    f"unknown skill or condition '{wanted}'",
+                    expected=one_of(available),
+                    suggestion=suggest(wanted, available),
+                )
     for name, (kind, providers) in available.items():
         if names and name not in names:
             continue
         for provider in providers:
-            title = Text.assemble(f"{kind} ", (name, "bold"), f"  from {provider.distribution}: {provider.target}")
-            table = Table(title=title, title_justify="left")
-            for column in ("parameter", "type", "default", "description"):
-                table.add_column(column)
             try:
                 cls = registry.resolve(kind, name) if len(providers) == 1 else _load(provider.target)
             except MissionError as err:
                 console.print(Text.assemble(f"{kind} {name} ({provider}): ", (str(err), "red")))
                 continue
-            needs = ", ".join(c.__name__ for c in cls.robot_kinds or ())
-            kinds = "no robot" if not cls.uses_robot else needs or "any robot"
-            primary = f" Primary: {cls.primary}." if getattr(cls, "primary", None) else ""
-            table.caption = Text(f"{cls.summary()} Robots: {kinds}.{primary}")
-            table.caption_justify = "left"
-            for field_name, info in cls.Params.model_fields.items():
-                default = "(required)" if info.is_required() else repr(info.default)
-                table.add_row(*(Text(cell) for cell in (field_name, _type_text(info.annotation), default, info.description or "")))
-            for port, keys in (("reads", cls.reads), ("writes", cls.writes)):
-                if keys:
-                    table.add_row(Text(port, "dim"), "blackboard", Text(", ".join(keys)), "")
-            console.print(table)
+            title = Text.assemble(f"{kind} ", (name, "bold"), f"  from {provider.distribution}: {provider.target}")
+            console.print(_node_table(title, cls))
+
+
+def _node_table(title: Text, cls: Any) -> Table:
+    """The ``skills`` table of one node class: its parameters, blackboard ports, summary and robots."""
+    table = Table(title=title, title_justify="left")
+    for column in ("parameter", "type", "default", "description"):
+        table.add_column(column)
+    needs = ", ".join(c.__name__ for c in cls.robot_kinds or ())
+    kinds = "no robot" if not cls.uses_robot else needs or "any robot"
+    primary = f" Primary: {cls.primary}." if getattr(cls, "primary", None) else ""
+    table.caption = Text(f"{cls.summary()} Robots: {kinds}.{primary}")
+    table.caption_justify = "left"
+    for field_name, info in cls.Params.model_fields.items():
+        default = "(required)" if info.is_required() else repr(info.default)
+        cells = (field_name, _type_text(info.annotation), default, info.description or "")
+        table.add_row(*(Text(cell) for cell in cells))
+    for port, keys in (("reads", cls.reads), ("writes", cls.writes)):
+        if keys:
+            table.add_row(Text(port, "dim"), "blackboard", Text(", ".join(keys)), "")
+    return table
 
 
 @cli.command()
@@ -303,15 +354,21 @@ def replay(log: str) -> None:
         run_log = read_log(log)
         marsupial_metadata(run_log, log)
     meta = run_log.metadata
-    click.echo(f"# {meta.get('mission_name', '?')} seed={meta.get('seed', '?')} outcome={run_log.outcome} "
-               f"sim_time={run_log.sim_time}")
+    click.echo(
+        f"# {meta.get('mission_name', '?')} seed={meta.get('seed', '?')} outcome={run_log.outcome} "
+        f"sim_time={run_log.sim_time}"
+    )
     click.echo(format_timeline(run_log), nl=False)
 
 
 @cli.command()
 @click.argument("source", type=click.Path())
-@click.option("--output", "-o", type=click.Path(dir_okay=False),
-              help="The page to write (default: LOG.html next to a log, CAMPAIGN_DIR/report.html for a campaign).")
+@click.option(
+    "--output",
+    "-o",
+    type=click.Path(dir_okay=False),
+    help="The page to write (default: LOG.html next to a log, CAMPAIGN_DIR/report.html for a campaign).",
+)
 def report(source: str, output: str | None) -> None:
     """Write the HTML report of a run log (SOURCE.mcap) or of a campaign folder (SOURCE = its --out).
 
@@ -351,12 +408,19 @@ def verify(log: str) -> None:
         copy = write_mission_copy(Path(tmp) / "mission", name, meta["mission"], json.loads(meta.get("subtrees", "{}")))
         mission = parse_mission(meta["mission"], str(copy), json.loads(meta.get("overrides", "{}")), copy)
         script = [(e.at, e.say, e.why) for e in mission.spec.operator]
-        live = [(e["t"], e["command"], e.get("why", ""), e["source"])
-                for e in original.events_of("operator") if e["source"] != "script"]
+        live = [
+            (e["t"], e["command"], e.get("why", ""), e["source"])
+            for e in original.events_of("operator")
+            if e["source"] != "script"
+        ]
         fresh_path = Path(tmp) / "verify.mcap"
         run_mission(
-            mission, seed=int(meta["seed"]), log_path=fresh_path, until=json.loads(meta.get("until", "null")),
-            progress=False, operator=OperatorChannel(script + live),
+            mission,
+            seed=int(meta["seed"]),
+            log_path=fresh_path,
+            until=json.loads(meta.get("until", "null")),
+            progress=False,
+            operator=OperatorChannel(script + live),
         )
         differences = compare_events(original, read_log(fresh_path))
     if differences:
@@ -369,7 +433,14 @@ def verify(log: str) -> None:
 @cli.command()
 @click.argument("mission")
 @click.option("--trials", type=click.IntRange(min=1), required=True, help="Trials per parameter combination.")
-@click.option("--seed", "base_seed", type=SEED, default=0, show_default=True, help="Seed of trial 0, an integer >= 0 (trial i: seed + i).")
+@click.option(
+    "--seed",
+    "base_seed",
+    type=SEED,
+    default=0,
+    show_default=True,
+    help="Seed of trial 0, an integer >= 0 (trial i: seed + i).",
+)
 @_set_option
 @click.option("--vary", multiple=True, metavar="KEY=V1,V2", help="Values to compare (cartesian product of all --vary).")
 @click.option("--workers", type=click.IntRange(min=1), help="Parallel trials (default: CPU count).")
@@ -377,10 +448,26 @@ def verify(log: str) -> None:
 @click.option("--address", help="Ray cluster address (default: start a local Ray inside --out).")
 @click.option("--out", type=click.Path(file_okay=False), default="campaign", show_default=True)
 @click.option("--until", type=float, callback=_positive_time, help="Time limit of each trial (simulated s, > 0).")
-@click.option("--logs", type=click.Choice(["failed", "all", "none"]), default="failed", show_default=True,
-              help="Which trials keep their MCAP log.")
-def campaign(mission: str, trials: int, base_seed: int, sets: tuple[str, ...], vary: tuple[str, ...],
-             workers: int | None, backend: str, address: str | None, out: str, until: float | None, logs: str) -> None:
+@click.option(
+    "--logs",
+    type=click.Choice(["failed", "all", "none"]),
+    default="failed",
+    show_default=True,
+    help="Which trials keep their MCAP log.",
+)
+def campaign(
+    mission: str,
+    trials: int,
+    base_seed: int,
+    sets: tuple[str, ...],
+    vary: tuple[str, ...],
+    workers: int | None,
+    backend: str,
+    address: str | None,
+    out: str,
+    until: float | None,
+    logs: str,
+) -> None:
     """Run independent seeded trials of MISSION in parallel; write trials.json/.csv and summary.json in --out."""
     from .campaign import run_campaign
 
@@ -388,8 +475,17 @@ def campaign(mission: str, trials: int, base_seed: int, sets: tuple[str, ...], v
         with bad_input():
             varied = {k: v.split(",") for k, v in _assignments(vary, "--vary").items()}
             summary = run_campaign(
-                mission, trials, out, base_seed, _assignments(sets, "--set"), varied, workers, backend, address,
-                until, logs,
+                mission,
+                trials,
+                out,
+                base_seed,
+                _assignments(sets, "--set"),
+                varied,
+                workers,
+                backend,
+                address,
+                until,
+                logs,
             )
     except KeyboardInterrupt:
         _err.print("campaign interrupted: no summary written")

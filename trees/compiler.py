@@ -111,6 +111,7 @@ class _Compiler:
 
     # ---------------------------------------------------------------- build
     def build(self, node: Any) -> Behaviour:  # a node model of the mission (its fields by kind)
+        """The py_trees behaviour of a mission node, its children built and its names made unique."""
         kind = node.kind
         if kind in ("skill", "condition"):
             return self.leaf(kind, getattr(node, kind), node.robot, node.params, node, node.name)
@@ -119,15 +120,27 @@ class _Compiler:
         if kind in WAITING_KINDS:
             return build_waiting(self, node)
         name = self.unique(node.name or kind)
+        if kind in ("sequence", "selector", "parallel", "priorities"):
+            return self.composite(kind, name, node)
+        return self.decorator(kind, name, node)
+
+    def composite(self, kind: str, name: str, node: Any) -> Behaviour:
+        """A ``sequence``, ``selector``, ``parallel`` or ``priorities`` node named ``name``, its children built."""
         if kind == "sequence":
-            return py_trees.composites.Sequence(name, memory=node.memory, children=[self.build(c) for c in node.sequence])
+            return py_trees.composites.Sequence(
+                name, memory=node.memory, children=[self.build(c) for c in node.sequence]
+            )
         if kind == "selector":
-            return py_trees.composites.Selector(name, memory=node.memory, children=[self.build(c) for c in node.selector])
+            return py_trees.composites.Selector(
+                name, memory=node.memory, children=[self.build(c) for c in node.selector]
+            )
         if kind == "parallel":
             policy = ParallelPolicy.SuccessOnAll() if node.success_on == "all" else ParallelPolicy.SuccessOnOne()
             return py_trees.composites.Parallel(name, policy=policy, children=self.parallel_branches(node.parallel))
-        if kind == "priorities":
-            return Priorities(name, [self.entry(e) for e in node.priorities], self.context)
+        return Priorities(name, [self.entry(e) for e in node.priorities], self.context)
+
+    def decorator(self, kind: str, name: str, node: Any) -> Behaviour:
+        """A ``repeat``, ``retry``, ``timeout``, ``invert`` or ``until`` node named ``name``, its child built."""
         if kind == "repeat":
             return py_trees.decorators.Repeat(name, self.build(node.repeat), num_success=node.times)
         if kind == "retry":
@@ -247,13 +260,16 @@ class _Compiler:
             given = "" if field_name in raw_params else " (its default)"
             if value not in team:
                 raise self.mission.error_at(
-                    at, f"parameter '{field_name}' names '{value}'{given}, which is not a team member",
-                    expected=f"a team member ({one_of(team)})", suggestion=suggest(value, team),
+                    at,
+                    f"parameter '{field_name}' names '{value}'{given}, which is not a team member",
+                    expected=f"a team member ({one_of(team)})",
+                    suggestion=suggest(value, team),
                 )
             if member.capability is not None and not robot_kind_matches(team[value].robot, (member.capability,)):
                 able = members_with(team, (member.capability,))
                 raise self.mission.error_at(
-                    at, f"parameter '{field_name}' names '{value}' (a {team[value].robot}), which lacks capability "
+                    at,
+                    f"parameter '{field_name}' names '{value}' (a {team[value].robot}), which lacks capability "
                     f"{member.capability.__name__}",
                     expected=f"a team member with capability {member.capability.__name__} "
                     f"({one_of(able) if able else 'none in this team'})",
@@ -272,11 +288,15 @@ class _Compiler:
             if len(team) == 1 and candidates:
                 return candidates[0]
             raise self.mission.error_at(
-                at, f"{kind} '{type_name}' needs a robot", expected=f"'robot:' naming a team member ({one_of(candidates or team)})"
+                at,
+                f"{kind} '{type_name}' needs a robot",
+                expected=f"'robot:' naming a team member ({one_of(candidates or team)})",
             )
         if robot not in team:
             raise self.mission.error_at(
-                at + ("robot",), f"unknown robot '{robot}'", expected=f"a team member ({one_of(team)})",
+                at + ("robot",),
+                f"unknown robot '{robot}'",
+                expected=f"a team member ({one_of(team)})",
                 suggestion=suggest(robot, team),
             )
         robot_kind = team[robot].robot
@@ -284,8 +304,10 @@ class _Compiler:
             matches = robot_kind_matches(robot_kind, cls.robot_kinds)
         except UnknownNameError as err:
             raise self.mission.error_at(
-                ("team", robot, "robot"), f"unknown robot kind '{robot_kind}'",
-                expected=one_of(err.known), suggestion=suggest(robot_kind, err.known),
+                ("team", robot, "robot"),
+                f"unknown robot kind '{robot_kind}'",
+                expected=one_of(err.known),
+                suggestion=suggest(robot_kind, err.known),
             ) from None
         if not matches:
             needs = " and ".join(c.__name__ for c in cls.robot_kinds or ())

@@ -22,7 +22,6 @@ import numpy as np
 from pydantic import Field
 
 from marsupial.sensing import scan_in_body, sensor_mount
-
 from marsupial.world.capabilities import HasBase, HasBattery, HasLidar
 
 from .skill import Condition, NodeParams
@@ -133,7 +132,9 @@ class AreaExplored(Condition["AreaExplored.Params"]):
 
 
 class DifficultArea(Condition["DifficultArea.Params"]):
-    """Holds when the robot's estimated position is within a distance of a declared zone or plan element tagged as difficult.
+    """Holds when the robot's estimated position is near a declared difficult zone or plan element.
+
+    Near means within a distance of a zone or plan element tagged as difficult.
 
     Zones and plan elements (door frames) come from the building plan the
     mission declares (``prior("building_plan")``), each by its box in plan

@@ -108,7 +108,7 @@ def scene_update(world: World, stamp: dict[str, int]) -> dict[str, Any]:
                                 "orientation": xyzw((0.0, 0.0, 0.0, 1.0)),
                             },
                             "size": xyz((scene.size[0], scene.size[1], thickness)),
-                            "color": dict(zip("rgba", [c / 255.0 for c in scene.floor.rgb] + [1.0])),
+                            "color": dict(zip("rgba", [c / 255.0 for c in scene.floor.rgb] + [1.0], strict=True)),
                         }
                     ],
                 )
@@ -130,7 +130,7 @@ def scene_update(world: World, stamp: dict[str, int]) -> dict[str, Any]:
                 primitive = {"pose": {"position": xyz(p), "orientation": xyzw(q)}, "size": xyz(size)}
                 if kind == "cylinders":
                     primitive.update(bottom_scale=1.0, top_scale=1.0)
-                primitive["color"] = dict(zip("rgba", map(float, rgba)))
+                primitive["color"] = dict(zip("rgba", map(float, rgba), strict=True))
                 primitives[kind].append(primitive)
             entities.append(_entity(stamp, label, list(obj.tags), **primitives))
         return {"deletions": [], "entities": entities}

@@ -63,6 +63,7 @@ from types import FrameType
 from typing import TYPE_CHECKING, Any
 
 import py_trees
+
 import marsupial
 
 from .btxml import STATUS_NAMES, to_btcpp_xml, walk
@@ -348,7 +349,7 @@ class Recorder:
         data = encode(payload)
         self._busy = True
         try:
-            for sink, channel in zip(self._sinks, self._channel(topic, schema_name)):
+            for sink, channel in zip(self._sinks, self._channel(topic, schema_name), strict=True):
                 sink.write(channel, ns, data)
         finally:
             self._busy = False
@@ -381,7 +382,10 @@ class Recorder:
 
     def _write_log(self, ns: int, level: int, message: str, name: str) -> None:
         self._write(
-            "/log", "foxglove.Log", ns, {"timestamp": foxglove_time(ns), "level": level, "message": message, "name": name}
+            "/log",
+            "foxglove.Log",
+            ns,
+            {"timestamp": foxglove_time(ns), "level": level, "message": message, "name": name},
         )
 
     # ------------------------------------------------------------ public logging
@@ -402,7 +406,9 @@ class Recorder:
             raise ValueError(f"unknown event kind '{kind}'; expected one of {', '.join(EVENT_KINDS)}{hint}")
         missing = [f for f in required if f not in fields]
         if missing:
-            raise ValueError(f"event '{kind}' needs the field(s) {', '.join(missing)}; got {', '.join(fields) or 'none'}")
+            raise ValueError(
+                f"event '{kind}' needs the field(s) {', '.join(missing)}; got {', '.join(fields) or 'none'}"
+            )
         self._write_event(t, kind, fields)
 
     def log_metric(self, t: float, name: str, value: float, **labels: Any) -> None:
@@ -447,7 +453,11 @@ class Recorder:
                 f"/{name}/pose",
                 POSE_SCHEMA,
                 ns,
-                {"timestamp": stamp, "frame_id": WORLD_FRAME, "pose": {"position": xyz(position), "orientation": xyzw(quaternion)}},
+                {
+                    "timestamp": stamp,
+                    "frame_id": WORLD_FRAME,
+                    "pose": {"position": xyz(position), "orientation": xyzw(quaternion)},
+                },
             )
         for name, (position, quaternion) in poses.items():
             translation, rotation = xyz(position), xyzw(quaternion)
@@ -509,7 +519,7 @@ class Recorder:
                 "previous_status": STATUS_NAMES[before],
                 "current_status": STATUS_NAMES[now],
             }
-            for uid, (node, before, now) in enumerate(zip(nodes, track.statuses, statuses), start=1)
+            for uid, (node, before, now) in enumerate(zip(nodes, track.statuses, statuses, strict=True), start=1)
             if before is not now
         ]
         track.statuses = statuses

@@ -16,9 +16,9 @@ from __future__ import annotations
 import importlib
 from collections.abc import Mapping
 from dataclasses import dataclass
-from functools import lru_cache
-from typing import Any
+from functools import cache
 from importlib.metadata import entry_points
+from typing import Any
 
 from .errors import MissionError, one_of, suggest
 from .skill import Condition, MissionNode, Skill
@@ -42,7 +42,7 @@ class Provider:
         return f"{self.distribution} ({self.target})"
 
 
-@lru_cache(maxsize=None)
+@cache
 def installed(kind: str) -> dict[str, tuple[Provider, ...]]:
     """Installed providers of skills (``kind="skill"``) or conditions, by name (cached per process)."""
     group = GROUPS[kind][0]

@@ -192,7 +192,7 @@ class RunLog:
         ]
         if not rows and name not in {m["name"] for m in self.metrics}:
             raise LogError(f"{self.path}: {_unknown('metric', name, (m['name'] for m in self.metrics))}")
-        t, values = zip(*rows) if rows else ((), ())
+        t, values = zip(*rows, strict=True) if rows else ((), ())
         return np.array(t, dtype=float), np.array(values, dtype=float)
 
     def events_of(self, kind: str) -> list[dict[str, Any]]:

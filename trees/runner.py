@@ -53,10 +53,11 @@ from marsupial.world.errors import UnknownNameError, WorldError
 from marsupial.world.scoring import Referee
 from marsupial.world.team_link import TeamLinkConfig
 
+from .arbitration import Arbiter
 from .compiler import CompiledTree, compile_mission
 from .errors import MissionError, check_seed, one_of, suggest
 from .mission import Mission, load_mission
-from .operator import CONTROL_COMMANDS, OperatorChannel
+from .operator import CONTROL_COMMANDS, OperatorChannel, OperatorCommand
 from .recorder import Recorder, Terminated
 from .sinks import Sink
 from .skill import RunContext
@@ -121,30 +122,8 @@ def build_world(mission: Mission, seed: int, gui: bool = False) -> World:
     except WorldError as err:
         raise _located(mission, ("world", "scene"), err) from None
     try:
-        for name, member in spec.team.items():
-            options: dict[str, Any] = dict(member.options)
-            if member.pose is not None:
-                options["pose"] = member.pose
-            if member.sensors:
-                options["sensors"] = member.sensors
-            try:
-                world.add_robot(member.robot, name, **options)
-            except (WorldError, TypeError, ValueError) as err:
-                raise _located(mission, ("team", name), err) from None
-        for name, member in spec.team.items():
-            if member.stored_on is not None:
-                carrier = world.robot(member.stored_on)
-                store = getattr(carrier, "store", None)
-                if store is None:
-                    raise mission.error_at(
-                        ("team", name, "stored_on"),
-                        f"'{member.stored_on}' (a {carrier.kind}) cannot carry robots",
-                        expected="a carrier robot with a storage (e.g. mobile_manipulator)",
-                    )
-                try:
-                    store(world.robot(name))
-                except (WorldError, ValueError) as err:
-                    raise _located(mission, ("team", name, "stored_on"), err) from None
+        _add_team(mission, world)
+        _store_team(mission, world)
         if spec.world.disturbances:
             try:
                 apply_disturbances(world, spec.world.disturbances, where="world.disturbances")
@@ -156,9 +135,44 @@ def build_world(mission: Mission, seed: int, gui: bool = False) -> World:
     return world
 
 
+def _add_team(mission: Mission, world: World) -> None:
+    """Add the mission's team robots to ``world`` at their poses, with their sensors and options."""
+    for name, member in mission.spec.team.items():
+        options: dict[str, Any] = dict(member.options)
+        if member.pose is not None:
+            options["pose"] = member.pose
+        if member.sensors:
+            options["sensors"] = member.sensors
+        try:
+            world.add_robot(member.robot, name, **options)
+        except (WorldError, TypeError, ValueError) as err:
+            raise _located(mission, ("team", name), err) from None
+
+
+def _store_team(mission: Mission, world: World) -> None:
+    """Put the team robots that start ``stored_on`` a carrier into its storage."""
+    for name, member in mission.spec.team.items():
+        if member.stored_on is None:
+            continue
+        carrier = world.robot(member.stored_on)
+        store = getattr(carrier, "store", None)
+        if store is None:
+            raise mission.error_at(
+                ("team", name, "stored_on"),
+                f"'{member.stored_on}' (a {carrier.kind}) cannot carry robots",
+                expected="a carrier robot with a storage (e.g. mobile_manipulator)",
+            )
+        try:
+            store(world.robot(name))
+        except (WorldError, ValueError) as err:
+            raise _located(mission, ("team", name, "stored_on"), err) from None
+
+
 def _located(mission: Mission, key_path: tuple[Any, ...], err: Exception) -> MissionError:
     if isinstance(err, UnknownNameError):
-        return mission.error_at(key_path, f"unknown {err.kind} '{err.name}'", one_of(err.known), suggest(err.name, err.known))
+        return mission.error_at(
+            key_path, f"unknown {err.kind} '{err.name}'", one_of(err.known), suggest(err.name, err.known)
+        )
     return mission.error_at(key_path, str(err))
 
 
@@ -314,11 +328,7 @@ def run_mission(
         mission = load_mission(mission, overrides)
     spec = mission.spec
     seed = spec.world.seed if seed is None else check_seed(seed)
-    if until is not None and not (isinstance(until, (int, float)) and not isinstance(until, bool) and 0 < until < math.inf):
-        raise MissionError(f"until {until!r} is not a time limit", expected="a finite number of simulated seconds > 0")
-    if pace is not None and not (isinstance(pace, (int, float)) and not isinstance(pace, bool) and 0 < pace < math.inf):
-        raise MissionError(f"speed {pace!r} is not a pace",
-                           expected="a finite number of simulated seconds per second > 0")
+    _check_limits(until, pace)
     if pace is None and (gui or operator_stdin):
         pace = 1.0  # a person watches or types
     until = spec.run.until if until is None else float(until)
@@ -334,14 +344,8 @@ def run_mission(
         channel.read_from(sys.stdin)
 
     log = Path(log_path) if log_path is not None else None
-    if log is not None:
-        log.parent.mkdir(parents=True, exist_ok=True)
-    recorder = None
-    if log is not None or sinks:
-        recorder = Recorder(log, _metadata(mission, seed, until), record_images=record_images, sinks=sinks)
+    recorder = _open_recorder(mission, seed, until, log, sinks, record_images, world)
     context.recorder = recorder
-    if recorder is not None:
-        recorder.time_source = lambda: world.now  # the log ends at the time the run reached, however it ends
     world.add_actor(Referee(world, context))  # truth-based scores, world side: skills never read them
     display = _Progress(console, progress)
     outcome, message, ticks = "failure", "", _TickCount()
@@ -376,6 +380,40 @@ def run_mission(
     if progress:
         console.print(summary_table(result))
     return result
+
+
+def _positive_finite(value: object) -> bool:
+    """Whether ``value`` is a real number (not a bool) in (0, inf)."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and 0 < value < math.inf
+
+
+def _check_limits(until: float | None, pace: float | None) -> None:
+    """Raise :class:`MissionError` unless the time limit (sim s) and the pace (sim s per s) are ``None`` or > 0."""
+    if until is not None and not _positive_finite(until):
+        raise MissionError(f"until {until!r} is not a time limit", expected="a finite number of simulated seconds > 0")
+    if pace is not None and not _positive_finite(pace):
+        raise MissionError(
+            f"speed {pace!r} is not a pace", expected="a finite number of simulated seconds per second > 0"
+        )
+
+
+def _open_recorder(
+    mission: Mission,
+    seed: int,
+    until: float | None,
+    log: Path | None,
+    sinks: Sequence[Sink],
+    record_images: bool,
+    world: World,
+) -> Recorder | None:
+    """The run's recorder writing to ``log`` and ``sinks`` (its folder created), ``None`` with neither."""
+    if log is not None:
+        log.parent.mkdir(parents=True, exist_ok=True)
+    if log is None and not sinks:
+        return None
+    recorder = Recorder(log, _metadata(mission, seed, until), record_images=record_images, sinks=sinks)
+    recorder.time_source = lambda: world.now  # the log ends at the time the run reached, however it ends
+    return recorder
 
 
 @dataclass
@@ -418,46 +456,99 @@ def _loop(
     paused = False
     while True:
         now = world.now
-        if recorder is not None and now + 1e-9 >= next_pose:
-            next_pose += POSE_PERIOD
-            recorder.log_robot_poses(
-                now,
-                {n: r.pose() for n, r in world.robots.items()},
-                {n: _estimated_pose(r) for n, r in world.robots.items()},
-            )
-        if now + 1e-9 >= next_metric:
-            next_metric += METRIC_PERIOD
-            for name, robot in world.robots.items():
-                soc = battery_of(robot)
-                if soc is not None:
-                    context.metric("battery_soc", soc, robot=name)
-        for command in channel.poll(now):
-            context.event("operator", command=command.say, source=command.source, why=command.why)
-            if command.say not in CONTROL_COMMANDS and command.say not in tree.listens and recorder is not None:
-                recorder.log_text(now, "warning", f"no node listens to operator command '{command.say}'")
-            if command.say == "abort":
-                return "aborted"
-            if command.say == "pause" and not paused:
-                paused = True
-                arbiter.new_tick()
-                for name in world.robots:
-                    arbiter.safe_stop(context.onboard(name), "operator", "operator")
-                context.event("state_change", state="paused")
-            elif command.say == "resume" and paused:
-                paused = False
-                context.event("state_change", state="running")
+        next_pose = _log_poses(recorder, world, now, next_pose)
+        next_metric = _log_batteries(context, world, now, next_metric)
+        aborted, paused = _operator_commands(context, channel, tree, world, now, paused)
+        if aborted:
+            return "aborted"
         if not paused:
-            arbiter.new_tick()
-            tree.root.tick_once()
-            ticks.n += 1
-            if recorder is not None:
-                recorder.log_tree(now, tree.root)
-            if tree.root.status in (Status.SUCCESS, Status.FAILURE):
-                return "success" if tree.root.status == Status.SUCCESS else "failure"
+            outcome = _tick(tree, arbiter, recorder, ticks, now)
+            if outcome is not None:
+                return outcome
         if until is not None and now + 1e-9 >= until:
             return "time_limit"
         world.step(period)
-        wall = time.perf_counter() - started
-        if pace is not None and world.now > wall * pace:
-            time.sleep(world.now / pace - wall)
+        wall = _hold_pace(world, pace, started)
         display.update(world, tree, wall, paused)
+
+
+def _log_poses(recorder: Any, world: World, now: float, due: float) -> float:
+    """Log every robot's true and estimated pose if the pose period is ``due`` at ``now`` (s); the next due time.
+
+    ``recorder`` is the run context's (a :class:`Recorder` or ``None``).
+    """
+    if recorder is None or now + 1e-9 < due:
+        return due
+    recorder.log_robot_poses(
+        now,
+        {n: r.pose() for n, r in world.robots.items()},
+        {n: _estimated_pose(r) for n, r in world.robots.items()},
+    )
+    return due + POSE_PERIOD
+
+
+def _log_batteries(context: RunContext, world: World, now: float, due: float) -> float:
+    """Record each battery's state of charge if the metric period is ``due`` at ``now`` (s); the next due time."""
+    if now + 1e-9 < due:
+        return due
+    for name, robot in world.robots.items():
+        soc = battery_of(robot)
+        if soc is not None:
+            context.metric("battery_soc", soc, robot=name)
+    return due + METRIC_PERIOD
+
+
+def _operator_commands(
+    context: RunContext, channel: OperatorChannel, tree: CompiledTree, world: World, now: float, paused: bool
+) -> tuple[bool, bool]:
+    """Apply the operator commands due at ``now`` (s): whether one aborts the run, and whether the run is paused."""
+    for command in channel.poll(now):
+        _note_command(context, tree, command, now)
+        if command.say == "abort":
+            return True, paused
+        if command.say == "pause" and not paused:
+            paused = True
+            _stop_all_robots(context, world)
+            context.event("state_change", state="paused")
+        elif command.say == "resume" and paused:
+            paused = False
+            context.event("state_change", state="running")
+    return False, paused
+
+
+def _note_command(context: RunContext, tree: CompiledTree, command: OperatorCommand, now: float) -> None:
+    """Record an operator command, with a log warning when neither the runner nor a node listens to it."""
+    recorder = context.recorder
+    context.event("operator", command=command.say, source=command.source, why=command.why)
+    if command.say not in CONTROL_COMMANDS and command.say not in tree.listens and recorder is not None:
+        recorder.log_text(now, "warning", f"no node listens to operator command '{command.say}'")
+
+
+def _stop_all_robots(context: RunContext, world: World) -> None:
+    """Pause: the arbiter leaves every robot's resources safe in a tick of the operator's own."""
+    arbiter = context.arbiter
+    arbiter.new_tick()
+    for name in world.robots:
+        arbiter.safe_stop(context.onboard(name), "operator", "operator")
+
+
+def _tick(
+    tree: CompiledTree, arbiter: Arbiter, recorder: Recorder | None, ticks: _TickCount, now: float
+) -> str | None:
+    """Tick the tree once (stamped by the arbiter, snapshot in the log); the outcome once the root has finished."""
+    arbiter.new_tick()
+    tree.root.tick_once()
+    ticks.n += 1
+    if recorder is not None:
+        recorder.log_tree(now, tree.root)
+    if tree.root.status in (Status.SUCCESS, Status.FAILURE):
+        return "success" if tree.root.status == Status.SUCCESS else "failure"
+    return None
+
+
+def _hold_pace(world: World, pace: float | None, started: float) -> float:
+    """Sleep until the wall clock is at ``pace`` (sim s per s) behind the world; the wall time (s) before the sleep."""
+    wall = time.perf_counter() - started
+    if pace is not None and world.now > wall * pace:
+        time.sleep(world.now / pace - wall)
+    return wall

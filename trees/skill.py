@@ -80,7 +80,9 @@ class NodeParams(BaseModel):
     accepted for tuple parameters.
     """
 
-    model_config = ConfigDict(extra="forbid", use_attribute_docstrings=True, frozen=True, strict=True, allow_inf_nan=False)
+    model_config = ConfigDict(
+        extra="forbid", use_attribute_docstrings=True, frozen=True, strict=True, allow_inf_nan=False
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -89,7 +91,9 @@ class NodeParams(BaseModel):
             return data
         fields = cls.model_fields
         return {
-            key: tuple(value) if isinstance(value, list) and key in fields and _tuple_field(fields[key].annotation) else value
+            key: tuple(value)
+            if isinstance(value, list) and key in fields and _tuple_field(fields[key].annotation)
+            else value
             for key, value in data.items()
         }
 
@@ -224,7 +228,9 @@ def _params_argument(cls: type) -> type[NodeParams] | None:
             if isinstance(arg, (str, ForwardRef)):
                 text = arg if isinstance(arg, str) else arg.__forward_arg__
                 if text != f"{cls.__name__}.Params" or "Params" not in cls.__dict__:
-                    raise TypeError(f"{cls.__name__}: a parameter class given as a string names '{cls.__name__}.Params'")
+                    raise TypeError(
+                        f"{cls.__name__}: a parameter class given as a string names '{cls.__name__}.Params'"
+                    )
                 return cast("type[NodeParams]", cls.__dict__["Params"])
             if isinstance(arg, type):
                 return arg
@@ -450,8 +456,12 @@ class Skill(MissionNode[P]):
             finally:
                 self._claimant.finishing = False
             self.context.event(
-                "outcome", node=self.name, skill=self.kind, robot=self.robot_name,
-                status=new_status.name, message=self.feedback_message,
+                "outcome",
+                node=self.name,
+                skill=self.kind,
+                robot=self.robot_name,
+                status=new_status.name,
+                message=self.feedback_message,
             )
 
 

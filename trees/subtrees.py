@@ -182,7 +182,10 @@ SEARCH_PATH_VARIABLE = "MARSUPIAL_SUBTREE_PATH"
 
 
 def allowed_roots(mission_file: Path | None) -> list[Path]:
-    """Folders subtree files may come from: the mission's folder, the package's missions, ``$MARSUPIAL_SUBTREE_PATH``."""
+    """Folders subtree files may come from.
+
+    The mission's folder, the package's missions, ``$MARSUPIAL_SUBTREE_PATH``.
+    """
     base = mission_file.resolve().parent if mission_file is not None else Path.cwd().resolve()
     extra = [Path(p).resolve() for p in os.environ.get(SEARCH_PATH_VARIABLE, "").split(os.pathsep) if p]
     return [base, mission_dir().resolve(), *extra]
@@ -236,12 +239,14 @@ class _Expander:
         roots = allowed_roots(self.mission.path)
         if not any(root == file.parent or root in file.parents for root in roots):
             raise self.mission.error_at(
-                ref_at, f"subtree '{node.subtree}' is outside the mission's folder",
-                expected=f"a subtree inside {roots[0]} or the package's missions (or add its folder to ${SEARCH_PATH_VARIABLE})",
+                ref_at,
+                f"subtree '{node.subtree}' is outside the mission's folder",
+                expected=f"a subtree inside {roots[0]} or the package's missions "
+                f"(or add its folder to ${SEARCH_PATH_VARIABLE})",
             )
         link = _Include(node.subtree, file, source.where(ref_at))
         if any(c.file == file for c in chain):
-            cycle = " -> ".join([c.name for c in chain[[c.file for c in chain].index(file):]] + [node.subtree])
+            cycle = " -> ".join([c.name for c in chain[[c.file for c in chain].index(file) :]] + [node.subtree])
             raise self.mission.error_at(
                 ref_at, f"subtree include cycle: {cycle}", expected="subtrees that do not include themselves"
             )
@@ -263,12 +268,12 @@ class _Expander:
         for name in node.params:
             if name not in declared:
                 raise self.mission.error_at(
-                    node.key_path + ("params", name), f"unknown parameter '{name}' of subtree '{node.subtree}'",
-                    expected=f"a declared parameter ({one_of(declared)})", suggestion=suggest(name, declared),
+                    node.key_path + ("params", name),
+                    f"unknown parameter '{name}' of subtree '{node.subtree}'",
+                    expected=f"a declared parameter ({one_of(declared)})",
+                    suggestion=suggest(name, declared),
                 )
-        values = {
-            name: self.settings(node, (name,), declared[name], value) for name, value in node.params.items()
-        }
+        values = {name: self.settings(node, (name,), declared[name], value) for name, value in node.params.items()}
         values = {**declared, **values}
         missing = [name for name, value in values.items() if value is None and declared[name] is None]
         if missing:
@@ -292,14 +297,17 @@ class _Expander:
         group = ".".join(map(str, rel))
         if not isinstance(value, Mapping):
             raise self.mission.error_at(
-                at, f"'{group}' of subtree '{node.subtree}' is a settings group, got {value!r}",
+                at,
+                f"'{group}' of subtree '{node.subtree}' is a settings group, got {value!r}",
                 expected=f"a mapping with some of {', '.join(default)}",
             )
         for key in value:
             if key not in default:
                 raise self.mission.error_at(
-                    at + (key,), f"unknown setting '{key}' in group '{group}' of subtree '{node.subtree}'",
-                    expected=f"a setting of the group ({one_of(default)})", suggestion=suggest(key, default),
+                    at + (key,),
+                    f"unknown setting '{key}' in group '{group}' of subtree '{node.subtree}'",
+                    expected=f"a setting of the group ({one_of(default)})",
+                    suggestion=suggest(key, default),
                 )
         return {**default, **{k: self.settings(node, rel + (k,), default[k], v) for k, v in value.items()}}
 
@@ -307,7 +315,8 @@ class _Expander:
         """Where each subtree parameter got its value: the include's ``params``, else the declared default."""
         include = node.key_path.source or self.mission.source
         return {
-            name: f"set at {include.where(node.key_path + ('params', name))}" if name in node.params
+            name: f"set at {include.where(node.key_path + ('params', name))}"
+            if name in node.params
             else f"set at {sub.source.where(('params', name))}"
             for name in arguments
         }
@@ -367,7 +376,9 @@ def write_mission_copy(folder: Path, mission_name: str, text: str, subtree_texts
     for key, body in subtree_texts.items():
         relative = Path(key)
         if relative.is_absolute() or ".." in relative.parts:
-            raise MissionError(f"subtree file '{key}' of the log would be written outside the copy", expected="a relative path")
+            raise MissionError(
+                f"subtree file '{key}' of the log would be written outside the copy", expected="a relative path"
+            )
         target = folder / relative
         target.parent.mkdir(parents=True, exist_ok=True)
         target.write_text(body)

@@ -113,6 +113,32 @@ def _is_group_merge(key_node: yaml.Node, value_node: yaml.Node) -> bool:
     )
 
 
+def _check_keys(loader: _Loader, node: yaml.MappingNode, path: tuple[Any, ...], doc: SourceDoc) -> None:
+    """Raise :class:`MissionError` at a key given twice in the mapping ``node`` (before YAML merges are resolved).
+
+    A ``<<: "${group}"`` entry gets a plain string key: it merges a parameter group later (trees/subtrees.py).
+    """
+    seen: dict[Any, yaml.Node] = {}
+    for key_node, value_node in node.value:
+        if _is_group_merge(key_node, value_node):
+            key_node.tag = "tag:yaml.org,2002:str"  # <<: "${group}" merges a parameter later (trees/subtrees.py)
+        if not isinstance(key_node, yaml.ScalarNode):
+            continue
+        key = "<<" if key_node.tag == _MERGE_TAG else loader.construct_object(key_node)
+        if key in seen and (key != "<<" or key_node.tag == seen[key].tag == "tag:yaml.org,2002:str"):
+            first_line = seen[key].start_mark.line + 1
+            line, column = _position(key_node.start_mark)
+            raise MissionError(
+                f"duplicate key '{key}' (first defined on line {first_line})",
+                doc.file,
+                line,
+                column,
+                path + (key,),
+                expected="each key once per mapping",
+            )
+        seen[key] = key_node
+
+
 def _build(loader: _Loader, node: yaml.Node, path: tuple[Any, ...], doc: SourceDoc, budget: list[int]) -> Any:
     """Plain value of ``node``, recording positions under ``path``; duplicate keys are errors.
 
@@ -121,26 +147,21 @@ def _build(loader: _Loader, node: yaml.Node, path: tuple[Any, ...], doc: SourceD
     budget[0] -= 1
     if budget[0] < 0 or len(path) > MAX_DEPTH:
         line, column = _position(node.start_mark)
-        what = f"more than {MAX_VALUES:,} values after alias expansion" if budget[0] < 0 else f"nested deeper than {MAX_DEPTH} levels"
+        what = (
+            f"more than {MAX_VALUES:,} values after alias expansion"
+            if budget[0] < 0
+            else f"nested deeper than {MAX_DEPTH} levels"
+        )
         raise MissionError(
-            f"document too large: {what}", doc.file, line, column, path,
+            f"document too large: {what}",
+            doc.file,
+            line,
+            column,
+            path,
             expected=f"at most {MAX_VALUES:,} values and {MAX_DEPTH} levels (a mission needs far fewer)",
         )
     if isinstance(node, yaml.MappingNode):
-        seen: dict[Any, yaml.Node] = {}
-        for key_node, value_node in node.value:
-            if _is_group_merge(key_node, value_node):
-                key_node.tag = "tag:yaml.org,2002:str"  # <<: "${group}" merges a parameter later (trees/subtrees.py)
-            if isinstance(key_node, yaml.ScalarNode):
-                key = "<<" if key_node.tag == _MERGE_TAG else loader.construct_object(key_node)
-                if key in seen and (key != "<<" or key_node.tag == seen[key].tag == "tag:yaml.org,2002:str"):
-                    first_line = seen[key].start_mark.line + 1
-                    line, column = _position(key_node.start_mark)
-                    raise MissionError(
-                        f"duplicate key '{key}' (first defined on line {first_line})",
-                        doc.file, line, column, path + (key,), expected="each key once per mapping",
-                    )
-                seen[key] = key_node
+        _check_keys(loader, node, path, doc)
         loader.flatten_mapping(node)  # resolve YAML merge keys (<<: *anchor)
         result: dict[Any, Any] = {}
         for key_node, value_node in node.value:
@@ -173,7 +194,10 @@ def load_yaml(text: str, file: str = "<string>") -> SourceDoc:
         raise _parse_error(exc, doc.file) from None
     except RecursionError:  # the YAML composer recurses per nesting level
         raise MissionError(
-            f"document too large: nested deeper than {MAX_DEPTH} levels", doc.file, None, None,
+            f"document too large: nested deeper than {MAX_DEPTH} levels",
+            doc.file,
+            None,
+            None,
             expected=f"at most {MAX_DEPTH} levels of nesting",
         ) from None
     finally:

@@ -254,7 +254,7 @@ class Onboard:
 
     # ------------------------------------------------------------ commands
     def safe_stop(self, resource: str | None = None) -> None:
-        """Leave ``resource`` safe (all when ``None``) by its safe-stop command: hover, stop the wheels, hold the arm."""
+        """Leave ``resource`` (``None``: all) safe by its safe-stop command: hover, stop wheels, hold the arm."""
         for name in sorted(self.resources()) if resource is None else (resource,):
             method = self.safe_stops.get(name)
             if method is not None:
@@ -270,7 +270,7 @@ class BatteryOnboard(Onboard):
     __slots__ = ()
 
     def battery(self) -> Any:
-        """Latest battery-monitor sample (:class:`~marsupial.world.energy.BatteryStatus`: SOC %, V, A), ``None`` before one."""
+        """Latest battery sample (:class:`~marsupial.world.energy.BatteryStatus`: SOC %, V, A), ``None`` before one."""
         reading = self.sensor("battery").read()
         return None if reading is None else reading.data
 
@@ -320,7 +320,7 @@ class QuadrotorOnboard(BatteryOnboard):
 
     @property
     def thrust(self) -> float:
-        """Total rotor thrust (N) the flight controller commands (motor speeds through its rotor model); 0 with the motors off."""
+        """Total thrust (N) the flight controller commands (motor speeds via its rotor model); 0 with the motors off."""
         return float(self._robot.thrust) if self.motors_on else 0.0  # type: ignore[attr-defined]
 
     @property
@@ -517,7 +517,7 @@ class CarrierOnboard(WheeledOnboard):
         return R_fp.T @ (p_M - p_fp), R_fp.T @ R_M
 
     def arm_base_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """Estimated pose of frame M: the footprint estimate composed with M's mount in the URDF (position m, quaternion)."""
+        """Estimated pose of frame M: the footprint estimate composed with M's URDF mount (position m, quaternion)."""
         estimate = self.estimate()
         p_M_fp, R_fp_M = self.arm_mount()
         R = estimate.rotation
@@ -593,8 +593,8 @@ def onboard_of(robot: Robot) -> Onboard:
     return port
 
 
-def base_frame_offset(p_base: np.ndarray, q_base: np.ndarray, p_link: np.ndarray, q_link: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def base_frame_offset(p_base: np.ndarray, q_base: np.ndarray, p_link: np.ndarray,
+                      q_link: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Position (m) and rotation of a link in its base frame, from the two world poses (model set-up only)."""
     R_base = rotation_matrix(q_base)
     return R_base.T @ (np.asarray(p_link) - np.asarray(p_base)), R_base.T @ rotation_matrix(q_link)
-

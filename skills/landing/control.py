@@ -54,6 +54,8 @@ from .prediction import KalmanParams, PlatformPredictor
 MODES = ("reactive", "predictive")
 #: default horizontal speed limit (m/s): the AR.Drone 2 model's; the skills pass their UAV's ``limits.max_speed_xy``
 MAX_SPEED_XY = 3.0
+#: the Kalman filter configuration a controller uses unless given one (§3.3.2)
+DEFAULT_KALMAN = KalmanParams()
 
 
 @dataclass(frozen=True)
@@ -170,7 +172,7 @@ class PlatformTracker:
         self,
         mode: str = "reactive",
         gains: PIGains = PIGains(),
-        kalman: KalmanParams = KalmanParams(),
+        kalman: KalmanParams = DEFAULT_KALMAN,
         max_speed: float = MAX_SPEED_XY,
         velocity_feedforward: bool = False,
         integral_band: float | None = None,

@@ -56,15 +56,31 @@ class FlightParams(NodeParams):
     """Parameters every flying skill of the landing cycle shares (tracker and nominal height)."""
 
     mode: Literal["reactive", "predictive"] = "predictive"
-    """Tracking controller: ``reactive`` (PI on the measured platform, §3.3.1) or ``predictive`` (PI on the Kalman prediction, §3.3.2)."""
+    """Tracking controller.
+
+    ``reactive``: PI on the measured platform (§3.3.1); ``predictive``: PI on the Kalman prediction (§3.3.2).
+    """
     gain_schedule: GainSchedule = "table1"
-    """PI gains K = Q·exp(-T·p_z): ``table1`` (T = 0.002 /m, the printed law, Table 1) or ``manual_fit`` (T fitted to K_p 0.45, K_i 0.1 at 4 m)."""
+    """PI gains K = Q·exp(-T·p_z).
+
+    ``table1`` (T = 0.002 /m, the printed law, Table 1) or ``manual_fit`` (T fitted to K_p 0.45, K_i 0.1 at 4 m).
+    """
     velocity_feedforward: bool = True
-    """Predictive mode: add the Kalman filter's platform velocity to the PI output and keep that velocity in the estimate's frame when the optical flow changes surfaces (not in the paper; ``false``: the paper's predictive controller). The reactive controller has no filter and never uses it."""
+    """Predictive mode: add the Kalman filter's platform velocity to the PI output.
+
+    That velocity is kept in the estimate's frame when the optical flow changes surfaces (not in the paper;
+    ``false``: the paper's predictive controller). The reactive controller has no filter and never uses it.
+    """
     path_time_s: float | None = Field(None, ge=0.0)
-    """How far ahead the prediction is taken (s). Default: 0.1 s (§3.3.2) without the feed-forward, 0 with it (the feed-forward supplies the lead)."""
+    """How far ahead the prediction is taken (s).
+
+    Default: 0.1 s (§3.3.2) without the feed-forward, 0 with it (the feed-forward supplies the lead).
+    """
     integral_band: float = Field(0.1, gt=0.0)
-    """With the feed-forward: integrate the PI error only while it is within this distance (m), so that a large transient (e.g. the take-off) does not wind the integral up (not in the paper)."""
+    """With the feed-forward: integrate the PI error only while it is within this distance (m).
+
+    A large transient (e.g. the take-off) then does not wind the integral up (not in the paper).
+    """
     nominal_height: float = Field(4.0, gt=0.0)  # nominal tracking height, §3.1
     """Nominal tracking height above the platform (m), §3.1."""
     platform: Annotated[str, TeamMember(HasPlatform)] | None = None
@@ -228,7 +244,10 @@ class Land(FlightSkill["Land.Params"]):
         final_speed: float = Field(2.0, gt=0.0)  # 2.0 m/s below 0.7 m, §3.3.1
         """Descent speed (m/s) of the final stage (the vehicle's vertical limit may cap it), §3.3.1."""
         landed_range: float = Field(TouchdownParams.landed_range, gt=0.0)
-        """Sonar reading (m) below which the UAV may be down (the paper gives no value; the AR.Drone 2 sonar reads ≥ 0.2 m)."""
+        """Sonar reading (m) below which the UAV may be down.
+
+        The paper gives no value; the AR.Drone 2 sonar reads ≥ 0.2 m.
+        """
         landed_hold_s: float = Field(TouchdownParams.hold_s, gt=0.0)
         """How long (s) the sonar must stay below ``landed_range`` ("for a certain period of time", §3.3.1)."""
         ride_accel: float = Field(TouchdownParams.ride_accel, gt=0.0)

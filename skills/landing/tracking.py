@@ -290,8 +290,8 @@ class TrackingModule:
         velocity's change that the flow made is added to the platform's
         velocity in the filter; once the flow has been predicted on the
         platform for the estimator's transition time, the platform is still
-        in the frame and the filter's velocity is held at zero. With the velocity feed-forward only (the paper's controller has
-        neither).
+        in the frame and the filter's velocity is held at zero. With the
+        velocity feed-forward only (the paper's controller has neither).
         """
         estimate, tracker = self.estimate, self.tracker
         R = rotation_matrix(estimate.orientation)
@@ -346,7 +346,11 @@ class TrackingModule:
         p, R = np.asarray(estimate.position, dtype=float), rotation_matrix(estimate.orientation)
         z_plane = float((p + R @ self._p_base_sonar)[2]) - height
         return CameraPose(
-            p + R @ self._p_base_camera, R @ self._R_base_camera, z_plane, p, yaw_of(estimate.orientation),
+            p + R @ self._p_base_camera,
+            R @ self._R_base_camera,
+            z_plane,
+            p,
+            yaw_of(estimate.orientation),
             tilt_of(estimate.orientation),
         )
 
@@ -406,9 +410,7 @@ class TrackingModule:
         if state == self.state:
             return
         previous, self.state = self.state, state
-        self.context.event(
-            "state_change", node=node.name, robot=self.uav.name, state=state, previous=previous, why=why
-        )
+        self.context.event("state_change", node=node.name, robot=self.uav.name, state=state, previous=previous, why=why)
 
     def begin_flight(self, config: TrackerConfig, node: MissionNode) -> None:
         """Take-off from the platform: new tracker, loss clock stopped, no re-localisation due.

@@ -93,7 +93,10 @@ def contact_height(z0: float, t_c: float, k_c: float = K_C) -> float:
 
 
 class Contact(Skill["Contact.Params"]):
-    """After the operator's authorization, raise Part A to the UAV's Part B by eq. (15), then magnet and levers lock it."""
+    """After the operator's authorization, raise Part A to the UAV's Part B by eq. (15).
+
+    Then magnet and levers lock it.
+    """
 
     class Params(NodeParams):
         carrier: CarrierName = "carrier"
@@ -111,18 +114,32 @@ class Contact(Skill["Contact.Params"]):
         lost_timeout: float = Field(0.3, gt=0.0)
         """Time (s) without the marker, farther than ``blind_range``, that cancels the contact."""
         blind_timeout: float = Field(6.0, gt=0.0)
-        """Time (s) without the marker, within ``blind_range``, that cancels the contact (the estimates' drift since the last frame)."""
+        """Time (s) without the marker, within ``blind_range``, that cancels the contact.
+
+        It bounds the estimates' drift since the last frame.
+        """
         align_gap: float = Field(0.03, ge=0.0)
-        """Gap (m) the approach holds until Part B is within ``align_tolerance`` of Part A's axis (no push on a misaligned UAV)."""
+        """Gap (m) the approach holds until Part B is within ``align_tolerance`` of Part A's axis.
+
+        No push on a misaligned UAV.
+        """
         align_tolerance: float = Field(0.008, gt=0.0)
-        """Lateral offset (m) of Part B from Part A's axis within which the last ``align_gap`` is closed (inside the magnet's 10 mm reach)."""
+        """Lateral offset (m) of Part B from Part A's axis within which the last ``align_gap`` is closed.
+
+        It is inside the magnet's 10 mm reach.
+        """
         D_c: float = Field(0.010, gt=0.0)
-        """Estimated gap D_c (m) at which the electromagnet is switched on, §IV-C: its 10 mm reach (it closes the gap to 0 mm); a gap
-        the estimate reads short is caught by the capture retry."""
+        """Estimated gap D_c (m) at which the electromagnet is switched on, §IV-C.
+
+        Its 10 mm reach (it closes the gap to 0 mm); a gap the estimate reads short is caught by the capture retry.
+        """
         rest_gap: float = Field(0.005, ge=0.0)
         """Gap (m) at which Part A stops below Part B (inside D_c): the magnet, not the arm, makes the contact."""
         capture_step: float = Field(0.004, ge=0.0)
-        """After each failed capture the approach aims this much (m) higher (down to ``-2·capture_step`` below the estimated face)."""
+        """After each failed capture the approach aims this much (m) higher.
+
+        Down to ``-2·capture_step`` below the estimated face.
+        """
         sonar_cone: bool = True
         """Map the UAV's downward range-finder cone as a prohibited zone (§IV-B)."""
         timeout: float = Field(30.0, gt=0.0)
@@ -224,17 +241,19 @@ class Contact(Skill["Contact.Params"]):
         return self.approach(state)
 
     def approach(self, state: TrackingState | None) -> Status:
-        """Eq. (15) on the standoff; at D_c (camera estimate) the magnet, on the contact switch the levers; cancel when blind too long."""
+        """Eq. (15) on the standoff; at D_c (camera estimate) the magnet, on the contact switch the levers.
+
+        Cancel when blind too long.
+        """
         p = self.params
         now = self.now
         p_B_A = state.p_B_A if state is not None else None
         gap = float(p_B_A[2]) if p_B_A is not None else math.inf
         if state is None or p_B_A is None:
             return self.cancel("no estimate of Part B")
-        if not state.seen and state.age() > (p.blind_timeout if gap <= p.blind_range else p.lost_timeout):
-            return self.cancel(f"marker lost {gap:.2f} m from Part B ({state.age():.1f} s unseen)")
-        if self.t0 is not None and now - self.t0 > p.timeout:  # t0: set when the approach began
-            return self.cancel(f"no lock after {p.timeout:.0f} s of approach")
+        reason = self.cancel_reason(state, gap)
+        if reason is not None:
+            return self.cancel(reason)
         lateral = math.hypot(float(p_B_A[0]), float(p_B_A[1]))
         aligned = lateral <= p.align_tolerance
         if aligned or self.s0 - p.k_c * math.log(self.t_c + 1.0) > p.align_gap:  # the contact clock t_c
@@ -267,8 +286,19 @@ class Contact(Skill["Contact.Params"]):
         self.write(self.key, ContactTarget(standoff, self.cone))
         self.context.metric("contact_t", self.t_c, robot=self.robot_name)
         self.context.metric("contact_z_C", contact_height(self.z0, self.t_c, p.k_c), robot=self.robot_name)
-        self.feedback_message = f"{self.phase}: t_c {self.t_c:.1f} s, estimated gap {gap:.3f} m (target {standoff:.3f} m)"
+        self.feedback_message = (
+            f"{self.phase}: t_c {self.t_c:.1f} s, estimated gap {gap:.3f} m (target {standoff:.3f} m)"
+        )
         return Status.RUNNING
+
+    def cancel_reason(self, state: TrackingState, gap: float) -> str | None:
+        """Why the approach stops now (marker unseen too long at this ``gap`` in m, no lock in time), else ``None``."""
+        p = self.params
+        if not state.seen and state.age() > (p.blind_timeout if gap <= p.blind_range else p.lost_timeout):
+            return f"marker lost {gap:.2f} m from Part B ({state.age():.1f} s unseen)"
+        if self.t0 is not None and self.now - self.t0 > p.timeout:  # t0: set when the approach began
+            return f"no lock after {p.timeout:.0f} s of approach"
+        return None
 
     def locked(self, state: TrackingState | None) -> Status:
         """Docked: record the contact time t_c and the docking time (from the start of tracking), succeed."""

@@ -31,13 +31,13 @@ Plain numpy/OpenCV on a plan-view grid of the mission's building plan
 from __future__ import annotations
 
 import heapq
+import itertools
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
-
 
 _NEIGHBOURS = [(-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)]
 
@@ -209,7 +209,7 @@ def truncate(points: np.ndarray, length: float) -> np.ndarray:
     """The polyline ``(n, 2)`` cut at arc length ``length`` (m) (the whole polyline if shorter)."""
     out = [points[0]]
     left = length
-    for a, b in zip(points[:-1], points[1:]):
+    for a, b in itertools.pairwise(points):
         segment = float(np.linalg.norm(b - a))
         if segment >= left:
             out.append(a + (b - a) * (left / segment if segment > 0 else 0.0))
@@ -310,8 +310,12 @@ class Blob:
     bottom: tuple[float, float]
 
 
-def detect_colour(rgb: np.ndarray, colour: tuple[int, int, int], min_pixels: int = 40, hue_tolerance: int = 6) -> Blob | None:
-    """The largest blob of pixels of ``colour`` (0-255 RGB, a saturated one) in an ``(h, w, 3)`` uint8 frame, or ``None``.
+def detect_colour(
+    rgb: np.ndarray, colour: tuple[int, int, int], min_pixels: int = 40, hue_tolerance: int = 6
+) -> Blob | None:
+    """The largest blob of pixels of ``colour`` in an ``(h, w, 3)`` uint8 frame, or ``None``.
+
+    ``colour`` is 0-255 RGB, a saturated one.
 
     A pixel matches when its OpenCV hue (0..180) is within ``hue_tolerance``
     of the colour's, its saturation at least 0.85 of the colour's (shading
@@ -339,7 +343,9 @@ def detect_colour(rgb: np.ndarray, colour: tuple[int, int, int], min_pixels: int
 def floor_point(
     K: np.ndarray, position: np.ndarray, R_nav_optical: np.ndarray, pixel: tuple[float, float], floor_z: float = 0.0
 ) -> np.ndarray | None:
-    """Where the ray through ``pixel`` (px) of a camera at ``position`` (m) meets the floor ``z = floor_z`` (m, nav frame).
+    """Where the ray through ``pixel`` (px) of a camera at ``position`` (m) meets the floor.
+
+    The floor is the plane ``z = floor_z`` (m, nav frame).
 
     ``None`` when the ray does not point down to the floor.
     """

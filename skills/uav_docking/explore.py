@@ -1,4 +1,6 @@
-"""Aerial exploration around the carrier (Narváez §II, §V-A): survey, stop every D_e to sweep the yaw, stay within D_team.
+"""Aerial exploration around the carrier (Narváez §II, §V-A).
+
+The UAV surveys, stops every D_e to sweep the yaw and stays within D_team.
 
 §V-A: "the aerial robot performs a series of movements to explore different
 building areas. It tries to follow a path γ_UAV that allows covering the
@@ -98,7 +100,10 @@ D_TEAM = 6.0  # m, D_team (§V-A): chosen — a room's reach indoors; flying it 
 
 
 class Explore(Skill["Explore.Params"]):
-    """Survey the rooms around the carrier with the UAV, stopping every D_e for a yaw sweep, within D_team of the carrier."""
+    """Survey the rooms around the carrier with the UAV, within D_team of the carrier.
+
+    The UAV stops every D_e for a yaw sweep.
+    """
 
     class Params(NodeParams):
         carrier: Annotated[str, TeamMember(HasBase)] = "carrier"
@@ -134,9 +139,15 @@ class Explore(Skill["Explore.Params"]):
         target_rgb: tuple[int, int, int] = (255, 120, 20)
         """Colour (0-255 RGB) of the searched object: the casualty's high-visibility orange."""
         target_pixels: int = Field(40, ge=1)
-        """Fewest pixels of that colour that count as a detection (the 0.5 × 1.7 m casualty at 6 m spans a few hundred at 320 × 240)."""
+        """Fewest pixels of that colour that count as a detection.
+
+        The 0.5 × 1.7 m casualty at 6 m spans a few hundred at 320 × 240.
+        """
         target_range: float = Field(6.0, gt=0.0)
-        """Farthest distance (m, horizontal, from the floor point under the detection) at which the target counts as found."""
+        """Farthest distance (m) at which the target counts as found.
+
+        Horizontal, from the floor point under the detection.
+        """
         camera_link: str = "camera_front"
         """URDF link carrying the front camera (its mount composes the camera pose with the UAV estimate)."""
         link_timeout: float = Field(1.0, gt=0.0)
@@ -156,7 +167,8 @@ class Explore(Skill["Explore.Params"]):
         p = self.params
         team = self.context.team()
         if p.carrier not in team or p.carrier == self.robot_name:
-            raise UnknownNameError(f"carrier of {self.name} (a team member)", p.carrier, [n for n in team if n != self.robot_name])
+            others = [n for n in team if n != self.robot_name]
+            raise UnknownNameError(f"carrier of {self.name} (a team member)", p.carrier, others)
         self.camera = self.robot.sensor("front_camera")
         self.camera_mount = sensor_mount(self.robot, p.camera_link, self.camera.offset, self.camera.R_link_optical)
         estimate = self.robot.estimate()
@@ -218,7 +230,10 @@ class Explore(Skill["Explore.Params"]):
         return Status.RUNNING
 
     def carrier_state(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """The carrier's position (m) and velocity (m/s) from its telemetry, extrapolated to now; ``None`` if too old."""
+        """The carrier's position (m) and velocity (m/s) from its telemetry, extrapolated to now.
+
+        ``None`` if too old.
+        """
         message = self.link.latest(self.params.carrier)
         if message is None or self.now - message.sent > self.params.link_timeout:
             return None
@@ -287,7 +302,9 @@ class Explore(Skill["Explore.Params"]):
         excluded = np.zeros(self.map.shape, dtype=bool)
         for stop in self.stops[-20:]:  # not back to where the last stops already looked
             excluded |= self.map.disc(stop, 1.0)
-        goal = next_goal(self.map, np.where(allowed, distance, np.inf), target_cells & ~self.seen, 2.0, 2.0 * p.D_e, excluded)
+        goal = next_goal(
+            self.map, np.where(allowed, distance, np.inf), target_cells & ~self.seen, 2.0, 2.0 * p.D_e, excluded
+        )
         if goal is None:  # nothing left to survey within reach: stay close to the carrier
             near = self.map.disc(carrier_xy, 1.5) & np.isfinite(distance)
             if not near.any() or self.map.disc(xy, 2.0)[self.map.index(carrier_xy)]:
@@ -295,7 +312,9 @@ class Explore(Skill["Explore.Params"]):
                 return
             goal = min(map(tuple, np.argwhere(near)), key=lambda c: distance[c])
         cells = shortcut(self.map, grid_path(self.map, parent, goal))
-        points = np.vstack([xy] + [self.map.point(c) for c in cells[1:]] if len(cells) > 1 else [xy, self.map.point(goal)])
+        points = np.vstack(
+            [xy] + [self.map.point(c) for c in cells[1:]] if len(cells) > 1 else [xy, self.map.point(goal)]
+        )
         self.waypoints = truncate(points, p.D_e - self.flown if self.flown < p.D_e else p.D_e)
         self.phase = "fly"
         goal_xy, stop_xy = self.map.point(goal), self.waypoints[-1]
@@ -324,7 +343,10 @@ class Explore(Skill["Explore.Params"]):
 
     # -------------------------------------------------------- constraints
     def leash_radius(self, z: float, carrier_z: float) -> float:
-        """Horizontal distance (m) to the carrier the UAV is held within: D_team − margin, less the height difference."""
+        """Horizontal distance (m) to the carrier the UAV is held within.
+
+        D_team − margin, less the height difference.
+        """
         p = self.params
         limit = p.D_team - p.leash_margin
         dz = z - carrier_z
@@ -418,7 +440,11 @@ class Explore(Skill["Explore.Params"]):
         self.found = True
         self.write(p.target_key, True)
         phase_event(
-            self, "target_found", target=p.target, at=[round(float(v), 2) for v in point[:2]],
-            uav=[round(float(v), 2) for v in position], pixels=blob.area,
+            self,
+            "target_found",
+            target=p.target,
+            at=[round(float(v), 2) for v in point[:2]],
+            uav=[round(float(v), 2) for v in position],
+            pixels=blob.area,
         )
         self.context.metric("target_found", 1.0, robot=self.robot_name)

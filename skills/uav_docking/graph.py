@@ -40,6 +40,7 @@ orientation per cycle (the P_VS orientation).
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -159,7 +160,7 @@ class Graph:
         on_a[self.path_to_root(a)] = True
         lca = np.arange(self.n)
         bounds = np.searchsorted(self.depth[self.order], np.arange(1, int(self.depth.max(initial=0)) + 2))
-        for start, end in zip(bounds[:-1], bounds[1:]):
+        for start, end in itertools.pairwise(bounds):
             level = self.order[start:end]
             lca[level] = np.where(on_a[level], level, lca[self.parent[level]])
         return self.cost[a] + self.cost - 2.0 * self.cost[lca]

@@ -140,7 +140,7 @@ class ArmGeometry:
         T_M_joint = np.array([T_M_root @ data.oMi[j].homogeneous for j in range(1, 7)])
         axes = kinematics.jacobian(q0)[3:].T  # joint axes in M at q = 0
         expected = (_AXIS_Z, _AXIS_Y, _AXIS_Y, _AXIS_Z, _AXIS_Y, _AXIS_Z)
-        if not all(np.allclose(a, e, atol=1e-9) for a, e in zip(axes, expected)):
+        if not all(np.allclose(a, e, atol=1e-9) for a, e in zip(axes, expected, strict=True)):
             raise ValueError(
                 f"closed-form IK expects joint axes z, y, y, z, y, z in M at q = 0 (arm upright); got {axes.round(3)}"
             )

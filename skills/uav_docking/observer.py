@@ -16,6 +16,7 @@ one.
 
 from __future__ import annotations
 
+import itertools
 from collections import deque
 from dataclasses import dataclass
 from typing import Any
@@ -68,7 +69,7 @@ class EncoderHistory:
             return samples[-1][1]
         if t <= samples[0][0]:
             return samples[0][1]
-        for (t0, q0), (t1, q1) in zip(samples, list(samples)[1:]):
+        for (t0, q0), (t1, q1) in itertools.pairwise(samples):
             if t0 <= t <= t1:
                 return q0 + (q1 - q0) * (t - t0) / (t1 - t0)
         return samples[-1][1]  # not reached: the samples are ordered

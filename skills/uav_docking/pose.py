@@ -208,7 +208,7 @@ def estimate_bundle_pose(
     dist = np.zeros(5) if dist_coeffs is None else np.asarray(dist_coeffs, dtype=float)
     _, rvecs, tvecs, _ = cv2.solvePnPGeneric(object_points, image_points, K, dist, flags=cv2.SOLVEPNP_IPPE)
     candidates = []
-    for rvec, tvec in zip(rvecs, tvecs):
+    for rvec, tvec in zip(rvecs, tvecs, strict=True):
         rvec, tvec = cv2.solvePnPRefineLM(object_points, image_points, K, dist, rvec.copy(), tvec.copy())
         projected, _ = cv2.projectPoints(object_points, rvec, tvec, K, dist)
         rms = float(np.sqrt(np.mean(np.sum((projected.reshape(-1, 2) - image_points) ** 2, axis=1))))

@@ -50,7 +50,10 @@ HOLD_HEIGHT = 0.30  # m: Part B above Part A of docking_ready; within its 0.35 m
 
 @dataclass(frozen=True)
 class HoldGains:
-    """Gains of the hold law: ``kp`` (1/s) on the position error, relative speed cap ``max_speed`` (m/s), ``k_yaw`` (1/s)."""
+    """Gains of the hold law.
+
+    ``kp`` (1/s) on the position error, relative speed cap ``max_speed`` (m/s), ``k_yaw`` (1/s).
+    """
 
     kp: float = 1.5
     max_speed: float = 0.5
@@ -74,11 +77,20 @@ class CarrierFrame:
 
     @classmethod
     def from_estimate(cls, estimate: StateEstimate, mount: tuple[np.ndarray, np.ndarray]) -> CarrierFrame:
-        """Frame M from the carrier's estimate (of its ``base_footprint``) and M's ``mount`` in that frame (position m, rotation; URDF)."""
+        """Frame M from the carrier's estimate (of its ``base_footprint``) and M's ``mount`` in that frame.
+
+        The mount is a position (m) and a rotation, from the URDF.
+        """
         R = rotation_matrix(estimate.orientation)
         p_base = np.asarray(estimate.position, dtype=float)
         p_M_base, R_base_M = mount
-        return cls(p_base + R @ p_M_base, R @ R_base_M, p_base, np.asarray(estimate.velocity), R @ np.asarray(estimate.angular_velocity))
+        return cls(
+            p_base + R @ p_M_base,
+            R @ R_base_M,
+            p_base,
+            np.asarray(estimate.velocity),
+            R @ np.asarray(estimate.angular_velocity),
+        )
 
     @classmethod
     def of(cls, carrier: Any) -> CarrierFrame:
@@ -154,8 +166,12 @@ def target_above_part_a(carrier: Any, uav: Any, height: float, arm_pose: str, ya
     return p_A_M + height * R_M_A[:, 2] - rot_z(yaw_M) @ part_b_offset(uav)
 
 
-def command_hold(uav: Any, state: RelativeState, p_target_M: np.ndarray, yaw_target_M: float, frame: CarrierFrame, gains: HoldGains) -> float | None:
-    """Send the hold command to ``uav`` (body frame) from the relative state; the distance (m) to the target, ``None`` without a pose.
+def command_hold(
+    uav: Any, state: RelativeState, p_target_M: np.ndarray, yaw_target_M: float, frame: CarrierFrame, gains: HoldGains
+) -> float | None:
+    """Send the hold command to ``uav`` (body frame) from the relative state.
+
+    Returns the distance (m) to the target, ``None`` without a pose.
 
     The estimated drift rate of the UAV's odometry (``state.drift_M``) is
     taken off the command: the autopilot tracks the command on its own,
@@ -173,7 +189,12 @@ def command_hold(uav: Any, state: RelativeState, p_target_M: np.ndarray, yaw_tar
 
 
 def relative_pose_of(
-    skill: Skill, carrier: Any, gain: float = 0.8, gate: float = 0.03, fuse: bool = True, since: float = -math.inf,
+    skill: Skill,
+    carrier: Any,
+    gain: float = 0.8,
+    gate: float = 0.03,
+    fuse: bool = True,
+    since: float = -math.inf,
     vision_fixes: bool = False,
 ) -> RelativePose:
     """The :class:`~.relative_pose.RelativePose` of ``skill``'s UAV relative to ``carrier``, computed on the carrier.
@@ -187,7 +208,10 @@ def relative_pose_of(
 
 
 class RelativeHold(Skill["RelativeHold.Params"]):
-    """Hold the UAV at a pose in the carrier's manipulator frame M (above Part A), on the camera-anchored estimate of P_Q^M."""
+    """Hold the UAV at a pose in the carrier's manipulator frame M (above Part A).
+
+    The hold acts on the camera-anchored estimate of P_Q^M.
+    """
 
     class Params(NodeParams):
         carrier: CarrierName = "carrier"
@@ -228,7 +252,9 @@ class RelativeHold(Skill["RelativeHold.Params"]):
             self.feedback_message = f"{self.robot_name} is not flying"
             return Status.FAILURE
         state = self.relative.update(self.now)
-        error = command_hold(self.robot, state, self.p_target_M, self.params.yaw_M, CarrierFrame.of(self.carrier), self.gains)
+        error = command_hold(
+            self.robot, state, self.p_target_M, self.params.yaw_M, CarrierFrame.of(self.carrier), self.gains
+        )
         if error is None:
             self.feedback_message = "no estimate of the UAV yet: hovering"
         else:

@@ -1,4 +1,6 @@
-"""The UAV pose in the manipulator frame M between camera frames: the two robots' own estimates, re-anchored by each frame.
+"""The UAV pose in the manipulator frame M between camera frames.
+
+The two robots' own estimates, re-anchored by each frame.
 
 The eye-in-hand camera measures P_Q^M (eq. 1) at its frame rate, late by
 its latency, and not at all when the bundle is out of view. Between frames
@@ -107,7 +109,8 @@ class RelativePoseFilter:
     ):
         if not 0.0 < gain <= 1.0 or gate <= 0.0 or max_rejections < 1 or not 0.0 <= rate_gain < 1.0 or gate_rate < 0.0:
             raise ValueError(
-                "RelativePoseFilter needs 0 < gain <= 1, gate > 0, max_rejections >= 1, 0 <= rate_gain < 1, gate_rate >= 0; "
+                "RelativePoseFilter needs 0 < gain <= 1, gate > 0, max_rejections >= 1, 0 <= rate_gain < 1, "
+                "gate_rate >= 0; "
                 f"got {gain}, {gate}, {max_rejections}, {rate_gain}, {gate_rate}"
             )
         self.gain, self.gate, self.max_rejections = gain, gate, max_rejections
@@ -119,7 +122,10 @@ class RelativePoseFilter:
         self.rejections = 0
 
     def rate_at(self, t: float) -> np.ndarray:
-        """The drift rate (m/s, N) at ``t``: zero once the last measurement is older than ``rate_horizon`` (no longer known)."""
+        """The drift rate (m/s, N) at ``t``.
+
+        Zero once the last measurement is older than ``rate_horizon`` (no longer known).
+        """
         return self.rate if t - self.t_ref <= self.rate_horizon else np.zeros(3)
 
     def drift(self, t: float) -> np.ndarray:
@@ -194,7 +200,9 @@ class RelativeState:
 
 
 class RelativePose:
-    """P_Q^M now: :class:`RelativePoseFilter` over the carrier's estimate, the UAV's link telemetry and the eye-in-hand frames.
+    """P_Q^M now.
+
+    A :class:`RelativePoseFilter` over the carrier's estimate, the UAV's link telemetry and the eye-in-hand frames.
 
     Runs on the carrier's computer: the carrier's own estimate, the UAV's as
     the team link delivers it, the frames of the carrier's
@@ -211,7 +219,14 @@ class RelativePose:
     """
 
     def __init__(
-        self, carrier, link, uav: str, observer, gain: float = 0.8, gate: float = 0.03, since: float = -math.inf,
+        self,
+        carrier,
+        link,
+        uav: str,
+        observer,
+        gain: float = 0.8,
+        gate: float = 0.03,
+        since: float = -math.inf,
         vision_fixes: bool = False,
     ):
         self.carrier, self.link, self.uav, self.observer = carrier, link, uav, observer
@@ -245,12 +260,15 @@ class RelativePose:
             self.uav_history.add(message.payload)
         observation = None if self.observer is None else self.observer.observe(now)
         pose = None if observation is None else observation.pose  # None: the bundle was not measured in it
-        fresh = observation is not None and observation.stamp >= now - MAX_FRAME_AGE_S  # not a frame from before this skill
+        # not a frame from before this skill
+        fresh = observation is not None and observation.stamp >= now - MAX_FRAME_AGE_S
         if observation is not None and pose is not None and fresh and observation.stamp > self.fused_stamp:
             self.fused_stamp = observation.stamp
             T_N_M, T_O_Q = self.T_N_M(observation.stamp, odometry=True), pose_at(self.uav_history, observation.stamp)
-            if T_N_M is not None and T_O_Q is not None and self.filter.measure(
-                pose.T_M_Q, T_N_M, T_O_Q, observation.stamp
+            if (
+                T_N_M is not None
+                and T_O_Q is not None
+                and self.filter.measure(pose.T_M_Q, T_N_M, T_O_Q, observation.stamp)
             ):
                 self.seen_at = observation.stamp
                 T_map_M = self.T_N_M(observation.stamp, odometry=False)  # the fix is in the frame the UAV's shares

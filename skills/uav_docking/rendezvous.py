@@ -110,7 +110,9 @@ class Rendezvous(Skill["Rendezvous.Params"]):
             self.feedback_message = f"{self.robot_name} is docked: nothing to meet"
             return Status.FAILURE
         state = self.relative.update(self.now)
-        distance = command_hold(self.robot, state, self.p_meet_M, self.params.yaw_M, CarrierFrame.of(self.carrier), self.gains)
+        distance = command_hold(
+            self.robot, state, self.p_meet_M, self.params.yaw_M, CarrierFrame.of(self.carrier), self.gains
+        )
         if distance is None:
             self.feedback_message = "waiting for the UAV's estimate over the team link"
             return Status.RUNNING

@@ -26,11 +26,11 @@ node that takes the arm over in the same tick as they stop keeps it.
 
 from __future__ import annotations
 
+from typing import Annotated
+
 import numpy as np
 from py_trees.common import Status
 from pydantic import Field
-
-from typing import Annotated
 
 from marsupial.trees.skill import NodeParams, Skill, TeamMember
 from marsupial.world.capabilities import Carrier, Rotorcraft
@@ -52,7 +52,10 @@ class Store(Skill["Store.Params"]):
         uav: Annotated[str, TeamMember(Rotorcraft)] = "uav"
         """The UAV being stored (named in the ``stored`` event)."""
         arm_pose: str = "storage"
-        """Arm pose that stores the UAV (a name of the carrier's arm poses): over the rear deck, sensors clear (§IV-B)."""
+        """Arm pose that stores the UAV (a name of the carrier's arm poses).
+
+        Over the rear deck, sensors clear (§IV-B).
+        """
         tolerance: float = Field(ARM_TOLERANCE, gt=0.0)
         """Largest joint error (rad) at which the arm has arrived."""
 
@@ -143,7 +146,8 @@ class Deploy(Skill["Deploy.Params"]):
                 T_M_Q = self.T_M_Q_release = self.hand_over()
                 self.p_clear_M = T_M_Q[:3, 3] + np.array([0.0, 0.0, self.params.clearance])
                 self.yaw_clear_M = yaw_of_rotation(T_M_Q[:3, :3])
-                self.relative = relative_pose_of(self, self.carrier, since=self.now)  # the estimates after the hand-over
+                # the estimates after the hand-over
+                self.relative = relative_pose_of(self, self.carrier, since=self.now)
                 self.carrier.docking.release()
                 self.write(f"{self.params.carrier}/{UAV_STORED}", False)
                 self.write(f"{self.params.carrier}/{PART_B_YAW}", None)  # released: no UAV on Part A
@@ -180,7 +184,9 @@ class Deploy(Skill["Deploy.Params"]):
         state = self.relative.update(self.now)
         if state.T_M_Q is None:  # no telemetry since the hand-over yet: the UAV is where it was released
             state = RelativeState(self.now, self.T_M_Q_release)
-        error = command_hold(self.robot, state, self.p_clear_M, self.yaw_clear_M, CarrierFrame.of(self.carrier), self.gains)
+        error = command_hold(
+            self.robot, state, self.p_clear_M, self.yaw_clear_M, CarrierFrame.of(self.carrier), self.gains
+        )
         if error is None:
             self.feedback_message = "waiting for the UAV's estimate over the team link"
             return Status.RUNNING

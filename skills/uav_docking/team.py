@@ -61,4 +61,6 @@ def carrier_port(skill: MissionNode[Any], name: str) -> CommandPort:
 
 def phase_event(skill: MissionNode[Any], phase: str, **fields: Any) -> None:
     """Record that ``skill`` entered ``phase`` (a ``state_change`` event with the node, skill, robot and ``fields``)."""
-    skill.context.event("state_change", node=skill.name, skill=skill.kind, robot=skill.robot_name, phase=phase, **fields)
+    skill.context.event(
+        "state_change", node=skill.name, skill=skill.kind, robot=skill.robot_name, phase=phase, **fields
+    )

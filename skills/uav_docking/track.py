@@ -149,35 +149,65 @@ class Track(Skill["Track.Params"]):
         carrier: CarrierName = "carrier"
         """Team member carrying the arm and its eye-in-hand camera (a mobile_manipulator)."""
         standoff: float = Field(0.40, ge=0.2, le=1.2)
-        """Camera-to-tag-plate distance (m) of the tracking target P_VS (chosen: the bundle fills the view, all tags found at 320×240)."""
+        """Camera-to-tag-plate distance (m) of the tracking target P_VS.
+
+        Chosen: the bundle fills the view, all tags found at 320×240.
+        """
         part_b_M: tuple[float, float, float] = (0.20, 0.0, 0.80)
-        """Part B's position (m) in M held by the UAV: in front of the shoulder axis, within the arm's reach for contact (chosen)."""
+        """Part B's position (m) in M held by the UAV.
+
+        In front of the shoulder axis, within the arm's reach for contact (chosen).
+        """
         yaw_M: float = math.pi
-        """UAV heading in M (rad) held while docking: facing the carrier's rear, so the camera sees the bundle during contact."""
+        """UAV heading in M (rad) held while docking.
+
+        Facing the carrier's rear, so the camera sees the bundle during contact.
+        """
         ee_yaw_M: float = 0.0
         """End-effector heading in M (rad) of the PBVS target (0: joint 6 mid-range at ``docking_ready``)."""
         hold_kp: float = Field(2.5, gt=0.0)
-        """Position gain of the UAV's hold in M (1/s; chosen: the stiffest without overshoot at 20 Hz, 3 cm RMS in 2 m/s gusts)."""
+        """Position gain of the UAV's hold in M (1/s).
+
+        Chosen: the stiffest without overshoot at 20 Hz, 3 cm RMS in 2 m/s gusts.
+        """
         hold_speed: float = Field(1.0, gt=0.0, le=4.0)
         """Largest UAV speed relative to the carrier while it takes its hold pose (m/s)."""
         max_age: float = Field(0.2, gt=0.0)
         """Oldest measurement (s) the UAV's hold and the engine use; older: the marker counts as unseen."""
         lost_timeout: float | None = Field(10.0, gt=0.0)
-        """Fail when the marker has not been seen for this long (s), counted from the end of a contact phase; none: never."""
+        """Fail when the marker has not been seen for this long (s), counted from the end of a contact phase.
+
+        None: never.
+        """
         contact: bool = True
         """Read the contact phase's target (``<carrier>/contact_target``, written by ``contact``)."""
         K_Lp: float = Field(0.005, ge=0.0)
-        """Constant K_Lp of eq. (12) (m/s), L_p = K_Lp·L_C / V_tr: small, the UAV holds still in M (the paper gives no value)."""
+        """Constant K_Lp of eq. (12) (m/s), L_p = K_Lp·L_C / V_tr.
+
+        Small, the UAV holds still in M (the paper gives no value).
+        """
         contact_vicinity: tuple[float, float] = (0.01, 0.02)
-        """Gains (K_a 1/m, K_b) of the vicinity (eq. 7) during contact: the relative pose is held, the end effector only rises."""
+        """Gains (K_a 1/m, K_b) of the vicinity (eq. 7) during contact.
+
+        The relative pose is held, the end effector only rises.
+        """
         lead: float = Field(0.15, ge=0.0)
-        """The engine plans on the UAV pose this far ahead (s), from its estimated velocity relative to M: the arm's lag."""
+        """The engine plans on the UAV pose this far ahead (s), from its estimated velocity relative to M.
+
+        This covers the arm's lag.
+        """
         fusion_gain: float = Field(0.8, gt=0.0, le=1.0)
-        """Weight of each eye-in-hand measurement in the UAV pose estimate (:class:`~.relative_pose.RelativePoseFilter`; the
-        camera is precise to millimetres at tracking range, the UAV's odometry over the carrier is not: 2.3 cm RMS of P_Q^M
-        against truth at 0.8 in a 25 s encounter, 6.3 cm at 0.3)."""
+        """Weight of each eye-in-hand measurement in the UAV pose estimate.
+
+        See :class:`~.relative_pose.RelativePoseFilter`. The camera is precise to millimetres at tracking range, the
+        UAV's odometry over the carrier is not: 2.3 cm RMS of P_Q^M against truth at 0.8 in a 25 s encounter, 6.3 cm
+        at 0.3.
+        """
         fusion_gate: float = Field(0.03, gt=0.0)
-        """Measurements farther than this (m) from the predicted pose are outliers (:class:`~.relative_pose.RelativePoseFilter`)."""
+        """Measurements farther than this (m) from the predicted pose are outliers.
+
+        See :class:`~.relative_pose.RelativePoseFilter`.
+        """
         vision_fixes: bool = False
         """Send each accepted camera frame to the UAV's estimator as an external vision fix (opt-in: measured worse)."""
         f_B: float = Field(4.0, gt=0.0)

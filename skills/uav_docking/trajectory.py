@@ -8,7 +8,8 @@ set-point speed so that successive trajectories (one per selection, at
 f_O) join without a stop. The joint PIDs track the sampled set-point.
 
 Limits: the speed limit is the arm's (:data:`JOINT_SPEED_LIMIT`, 15 rpm =
-1.571 rad/s, the same figure as the arm's model, ``ArmKinematics.velocity_limit``). The paper gives no acceleration limit: 10 rad/s² reaches
+1.571 rad/s, the same figure as the arm's model, ``ArmKinematics.velocity_limit``).
+The paper gives no acceleration limit: 10 rad/s² reaches
 15 rpm in 0.16 s, within the joints' stall torques even for the arm
 stretched horizontally with a 0.5 kg UAV at the tip (joint 2: 1.35 kg·m²
 and 18.5 N·m of gravity from the pinocchio model, so 32 of its 44.7 N·m).

@@ -60,10 +60,7 @@ def section_frames(items: np.ndarray, direction: np.ndarray) -> np.ndarray:
     side at the ends); a single item uses ``direction`` (horizontal unit vector).
     """
     items = np.asarray(items, dtype=float)
-    if items.shape[0] == 1:
-        tangents = np.array([[direction[0], direction[1], 0.0]])
-    else:
-        tangents = np.gradient(items, axis=0)
+    tangents = np.array([[direction[0], direction[1], 0.0]]) if items.shape[0] == 1 else np.gradient(items, axis=0)
     tangents = tangents / np.linalg.norm(tangents, axis=1, keepdims=True)
     up = np.array([0.0, 0.0, 1.0])
     across = np.cross(up, tangents)

@@ -40,6 +40,7 @@ from .cord import Cord
 from .ik_engine import ArmGeometry
 from .vicinity import Vicinity
 
+
 def _fibonacci_sphere(n: int) -> np.ndarray:
     """``(n, 3)`` unit vectors spread evenly over the sphere (Fibonacci lattice)."""
     k = np.arange(n) + 0.5
@@ -224,7 +225,7 @@ class ZoneMap:
         h = p.column_height / 2.0
         bottom = np.concatenate((xy, np.full((unique.size, 4, 1), -h)), axis=2)
         vertices = np.concatenate((bottom, bottom + [0.0, 0.0, 2.0 * h]), axis=1)
-        for b, v in zip(unique, vertices):
+        for b, v in zip(unique, vertices, strict=True):
             self._add(f"{name}_{b}", "obstacle", fcl.Convex(v, 6, _PRISM_FACES), None, v)
         self._refresh()
         return int(unique.size)
@@ -249,7 +250,7 @@ class ZoneMap:
             free &= ~np.any(self.bounds.push(points, clearance) != 0.0, axis=1)
         query, zone = self._candidates(points - clearance, points + clearance)
         sphere = fcl.CollisionObject(fcl.Sphere(max(clearance, 1e-9)))
-        for i, j in zip(query, zone):
+        for i, j in zip(query, zone, strict=True):
             if free[i]:
                 sphere.setTranslation(points[i])
                 free[i] = fcl.collide(sphere, self.zones[j].obj, _COLLIDE, fcl.CollisionResult()) == 0
@@ -267,7 +268,7 @@ class ZoneMap:
         shift = np.zeros_like(points) if self.bounds is None else self.bounds.push(points, clearance)
         query, zone = self._candidates(points - clearance, points + clearance)
         sphere = fcl.CollisionObject(fcl.Sphere(max(clearance, 1e-9)))
-        for i, j in zip(query, zone):
+        for i, j in zip(query, zone, strict=True):
             sphere.setTranslation(points[i])
             result = fcl.DistanceResult()
             depth = -fcl.distance(sphere, self.zones[j].obj, _SIGNED, result)
@@ -302,7 +303,7 @@ class ZoneMap:
         if self.bounds is not None and np.any(self.bounds.push(vicinity.centers, vicinity.max_semi_axis + clearance)):
             return False
         query, zone = self._candidates(lower, upper)
-        for i, j in zip(query, zone):
+        for i, j in zip(query, zone, strict=True):
             shape = fcl.Ellipsoid(*(vicinity.semi_axes[i] + clearance))
             ellipsoid = fcl.CollisionObject(shape, fcl.Transform(vicinity.rotations[i], vicinity.centers[i]))
             if fcl.collide(ellipsoid, self.zones[j].obj, _COLLIDE, fcl.CollisionResult()):

@@ -39,7 +39,8 @@ class Mission:
     path: Path | None
     source: SourceDoc
     overrides: dict[str, str] = field(default_factory=dict)
-    references: dict[tuple[Any, ...], str] = field(default_factory=dict, repr=False)  # (file, include note, key path) -> note
+    # (file, include note, key path) -> note
+    references: dict[tuple[Any, ...], str] = field(default_factory=dict, repr=False)
     #: texts of the subtree files inlined, by their path relative to the mission's folder (see :func:`subtree_key`)
     subtree_texts: dict[str, str] = field(default_factory=dict, repr=False)
 
@@ -48,7 +49,9 @@ class Mission:
         """The mission's name (its ``mission:`` key)."""
         return self.spec.mission
 
-    def _place(self, where: KeyPathLike | NodeBase | Guard | PriorityEntry) -> tuple[SourceDoc, tuple[Any, ...], str | None]:
+    def _place(
+        self, where: KeyPathLike | NodeBase | Guard | PriorityEntry
+    ) -> tuple[SourceDoc, tuple[Any, ...], str | None]:
         """(source document, key path, include note) of a key path or node."""
         key_path = getattr(where, "key_path", where)
         return getattr(key_path, "source", None) or self.source, tuple(key_path), getattr(key_path, "note", None)
@@ -139,8 +142,6 @@ def find_mission(name_or_path: str | Path) -> Path:
     raise MissionError(what, expected=f"{names}a path to a mission .yaml file", suggestion=suggest(path.stem, known))
 
 
-
-
 # ---------------------------------------------------------------------- loading
 
 
@@ -200,6 +201,8 @@ def _check_robots(mission: Mission) -> None:
         for key_path, robot in _robot_refs(node):
             if robot not in team:
                 raise mission.error_at(
-                    key_path, f"unknown robot '{robot}'", expected=f"a team member ({one_of(team)})",
+                    key_path,
+                    f"unknown robot '{robot}'",
+                    expected=f"a team member ({one_of(team)})",
                     suggestion=suggest(robot, team),
                 )

@@ -8,7 +8,7 @@ also knows its source document), so later stages report problems there.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping
-from typing import Annotated, Any, ClassVar, Literal, TypeAlias, Union, cast, get_args
+from typing import Annotated, Any, ClassVar, Literal, TypeAlias, cast, get_args
 
 from pydantic import (
     AfterValidator,
@@ -422,28 +422,28 @@ class SubtreeNode(NodeBase):
 
 #: every tree node, as a discriminated union on its node-type key (what :func:`node_kind` finds)
 Node: TypeAlias = Annotated[
-    Union[
-        Annotated[SequenceNode, Tag("sequence")],
-        Annotated[SelectorNode, Tag("selector")],
-        Annotated[ParallelNode, Tag("parallel")],
-        Annotated[PrioritiesNode, Tag("priorities")],
-        Annotated[RepeatNode, Tag("repeat")],
-        Annotated[RetryNode, Tag("retry")],
-        Annotated[TimeoutNode, Tag("timeout")],
-        Annotated[InvertNode, Tag("invert")],
-        Annotated[UntilNode, Tag("until")],
-        Annotated[RunForNode, Tag("run_for")],
-        Annotated[WaitUntilNode, Tag("wait_until")],
-        Annotated[IdleNode, Tag("idle")],
-        Annotated[SkillNode, Tag("skill")],
-        Annotated[ConditionNode, Tag("condition")],
-        Annotated[SubtreeNode, Tag("subtree")],
-    ],
+    Annotated[SequenceNode, Tag("sequence")]
+    | Annotated[SelectorNode, Tag("selector")]
+    | Annotated[ParallelNode, Tag("parallel")]
+    | Annotated[PrioritiesNode, Tag("priorities")]
+    | Annotated[RepeatNode, Tag("repeat")]
+    | Annotated[RetryNode, Tag("retry")]
+    | Annotated[TimeoutNode, Tag("timeout")]
+    | Annotated[InvertNode, Tag("invert")]
+    | Annotated[UntilNode, Tag("until")]
+    | Annotated[RunForNode, Tag("run_for")]
+    | Annotated[WaitUntilNode, Tag("wait_until")]
+    | Annotated[IdleNode, Tag("idle")]
+    | Annotated[SkillNode, Tag("skill")]
+    | Annotated[ConditionNode, Tag("condition")]
+    | Annotated[SubtreeNode, Tag("subtree")],
     Discriminator(node_kind),
 ]
 
 #: node-type key -> node model, in the union's order
-NODE_CLASSES: dict[str, type[NodeBase]] = {get_args(member)[0].kind: get_args(member)[0] for member in get_args(get_args(Node)[0])}
+NODE_CLASSES: dict[str, type[NodeBase]] = {
+    get_args(member)[0].kind: get_args(member)[0] for member in get_args(get_args(Node)[0])
+}
 
 _MODELS: tuple[type[BaseModel], ...] = (*NODE_CLASSES.values(), PriorityEntry)
 for _cls in _MODELS:

@@ -37,7 +37,9 @@ def _is_mapping_type(tp: Any) -> bool:
     return get_origin(tp) is dict or (isinstance(tp, type) and issubclass(tp, BaseModel))
 
 
-def apply_overrides(data: dict[str, Any], overrides: Mapping[str, str], file: str | None = None) -> dict[tuple[Any, ...], str]:
+def apply_overrides(
+    data: dict[str, Any], overrides: Mapping[str, str], file: str | None = None
+) -> dict[tuple[Any, ...], str]:
     """Set ``--set key=value`` overrides in mission ``data`` (in place); values are parsed as YAML.
 
     A key is a dotted path (``params.cruise_height``, ``world.seed``,
@@ -57,14 +59,16 @@ def apply_overrides(data: dict[str, Any], overrides: Mapping[str, str], file: st
             parts = ["params", *parts]  # a key of a settings group: tracker.mode = params.tracker.mode
         elif parts[0] not in _SECTIONS:
             raise MissionError(
-                f"{shown}: '{parts[0]}' is neither a mission section nor a mission parameter", file,
+                f"{shown}: '{parts[0]}' is neither a mission section nor a mission parameter",
+                file,
                 expected=f"a section ({one_of(_SECTIONS)}) or a mission parameter ({one_of(params)})",
                 suggestion=suggest(parts[0], list(_SECTIONS) + list(params)),
             )
         if "." not in key and key not in params:
             names = [f"params.{p}" for p in params] + [f"{s}." for s in _SECTIONS]
             raise MissionError(
-                f"{shown}: '{key}' is not a mission parameter", file,
+                f"{shown}: '{key}' is not a mission parameter",
+                file,
                 expected=f"a mission parameter ({one_of(params)}) or a dotted key such as world.seed",
                 suggestion=suggest(key, list(params) + names),
             )
@@ -79,7 +83,8 @@ def apply_overrides(data: dict[str, Any], overrides: Mapping[str, str], file: st
                 full = [f"{prefix}.{a}" if prefix else str(a) for a in allowed]
                 key_text = ".".join(str(p) for p in parts[: depth + 1])
                 raise MissionError(
-                    f"{shown}: unknown key '{key_text}'", file,
+                    f"{shown}: unknown key '{key_text}'",
+                    file,
                     expected=one_of(full) if full else f"'{prefix}' to hold a mapping or a list",
                     suggestion=suggest(key_text, full),
                 )

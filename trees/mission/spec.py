@@ -27,7 +27,9 @@ class TeamLinkSpec(BaseModel):
     latency_s: float = Field(0.02, ge=0, le=5.0, description="One-way latency of a message (s).")
     jitter_s: float = Field(0.01, ge=0, le=5.0, description="Standard deviation of the extra delay (s).")
     drop: float = Field(0.02, ge=0, le=1, description="Probability that a message is lost.")
-    telemetry_hz: float = Field(20.0, gt=0, le=240, description="Rate at which every robot broadcasts its estimate (Hz).")
+    telemetry_hz: float = Field(
+        20.0, gt=0, le=240, description="Rate at which every robot broadcasts its estimate (Hz)."
+    )
 
 
 class SensingSpec(BaseModel):
@@ -61,7 +63,9 @@ class TeamMember(BaseModel):
 
     model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
     robot: str = Field(description="Robot kind (see world/robots ROBOT_KINDS).")
-    pose: list[float] | None = Field(None, description="Start pose [x, y], [x, y, yaw] (ground robots) or [x, y, z, yaw] (m, rad, world frame).")
+    pose: list[float] | None = Field(
+        None, description="Start pose [x, y], [x, y, yaw] (ground robots) or [x, y, z, yaw] (m, rad, world frame)."
+    )
     stored_on: str | None = Field(None, description="Team member that carries this robot at the start.")
     sensors: dict[str, Any] = Field(default_factory=dict, description="Sensor configurations by sensor name.")
     options: dict[str, Any] = Field(default_factory=dict, description="Options passed to the robot constructor.")
@@ -81,8 +85,12 @@ class RunSpec(BaseModel):
 
     model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
     tick_hz: float = Field(
-        10.0, ge=0.01, le=240.0,
-        description="Tree tick rate (Hz, simulated time): at most the physics rate (240 Hz), at least one tick per 100 s.",
+        10.0,
+        ge=0.01,
+        le=240.0,
+        description=(
+            "Tree tick rate (Hz, simulated time): at most the physics rate (240 Hz), at least one tick per 100 s."
+        ),
     )
     until: float | None = Field(None, gt=0, description="Stop the run at this simulated time (s); none: no limit.")
 
@@ -119,7 +127,10 @@ class MissionSpec(BaseModel):
                 raise PydanticCustomError(
                     "unknown_carrier",
                     f"'{member.stored_on}' cannot carry '{name}'",
-                    {"expected": f"another team member ({one_of(others)})",
-                     "suggestion": suggest(member.stored_on, others), "at": ("team", name, "stored_on")},
+                    {
+                        "expected": f"another team member ({one_of(others)})",
+                        "suggestion": suggest(member.stored_on, others),
+                        "at": ("team", name, "stored_on"),
+                    },
                 )
         return self

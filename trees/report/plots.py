@@ -85,16 +85,8 @@ def _footprint(kind: str, primitive: Mapping[str, Any]) -> tuple[Any, list[float
             [p["x"] - r, p["x"] + r], [p["y"] - r, p["y"] + r])
 
 
-@_styled
-def map_svg(scene: Mapping[str, Any] | None, paths: Mapping[str, Mapping[str, np.ndarray]]) -> str:
-    """Top-down map (x-y, world frame, m): scene objects, and each robot's true and estimated path.
-
-    ``paths``: robot -> ``{"truth": (N, 3), "estimate": (M, 3)}`` (either may be missing).
-    The view is a square around the paths with a margin of 25 % (at least 3 m),
-    or around the scene objects (not the floor) when there are no paths.
-    """
-    fig = _figure(7.0, 6.0)
-    ax = fig.add_subplot()
+def _plot_paths(ax: Any, paths: Mapping[str, Mapping[str, np.ndarray]]) -> tuple[list[float], list[float]]:
+    """Draw each robot's true path (start, end marked) and estimated path on ``ax``; the x, y values drawn (m)."""
     xs: list[float] = []
     ys: list[float] = []
     for index, (robot, tracks) in enumerate(paths.items()):
@@ -110,7 +102,16 @@ def map_svg(scene: Mapping[str, Any] | None, paths: Mapping[str, Mapping[str, np
             ax.plot(estimate[:, 0], estimate[:, 1], color=colour, lw=1.1, ls="--", label=f"{robot} estimate")
             xs += list(estimate[:, 0])
             ys += list(estimate[:, 1])
-    has_paths = bool(xs)
+    return xs, ys
+
+
+def _plot_scene(
+    ax: Any, scene: Mapping[str, Any] | None, extent: tuple[list[float], list[float]] | None
+) -> Mapping[str, Any] | None:
+    """Draw the scene's objects from above on ``ax``; the floor entity (not drawn), if any.
+
+    With ``extent`` (x and y lists, m), the objects' footprints are added to it: the objects set the view.
+    """
     floor = None
     for entity in (scene or {}).get("entities", []):
         if entity.get("id") == "floor":
@@ -120,9 +121,25 @@ def map_svg(scene: Mapping[str, Any] | None, paths: Mapping[str, Mapping[str, np
             for primitive in entity.get(kind, []):
                 patch, px, py = _footprint(kind, primitive)
                 ax.add_patch(patch)
-                if not has_paths:  # the objects set the view
-                    xs += px
-                    ys += py
+                if extent is not None:
+                    extent[0].extend(px)
+                    extent[1].extend(py)
+    return floor
+
+
+@_styled
+def map_svg(scene: Mapping[str, Any] | None, paths: Mapping[str, Mapping[str, np.ndarray]]) -> str:
+    """Top-down map (x-y, world frame, m): scene objects, and each robot's true and estimated path.
+
+    ``paths``: robot -> ``{"truth": (N, 3), "estimate": (M, 3)}`` (either may be missing).
+    The view is a square around the paths with a margin of 25 % (at least 3 m),
+    or around the scene objects (not the floor) when there are no paths.
+    """
+    fig = _figure(7.0, 6.0)
+    ax = fig.add_subplot()
+    xs, ys = _plot_paths(ax, paths)
+    has_paths = bool(xs)
+    floor = _plot_scene(ax, scene, None if has_paths else (xs, ys))
     if not xs:
         xs, ys = [-1.0, 1.0], [-1.0, 1.0]
     span = max(max(xs) - min(xs), max(ys) - min(ys), 1.0)

@@ -45,8 +45,8 @@ it (a carrier's hand-over). Units: m, m/s, rad.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np

@@ -13,9 +13,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet
 
-from ..assets import asset_path
 from marsupial.geometry import Vector, yaw_of  # (yaw_of is also re-exported for the robot modules)
 
+from ..assets import asset_path
 from ..errors import UnknownNameError
 from ..onboard import Onboard, base_frame_offset
 

@@ -52,13 +52,13 @@ from marsupial.geometry import Vector
 
 from ..assets import asset_path
 from ..errors import UnknownNameError
+from ..estimation.ground import SKID_STEER_ODOMETRY
+from ..onboard import ManipulatorOnboard, simulates_hardware
 from ..sensors.base import SensorConfig
 from ..sensors.camera import OPTICAL_FORWARD, Camera, Intrinsics
 from .arm import ArmController
 from .attachment import set_collisions, weld
 from .base import Robot, yaw_of
-from ..estimation.ground import SKID_STEER_ODOMETRY
-from ..onboard import ManipulatorOnboard, simulates_hardware
 from .diff_drive import DiffDriveLimits
 from .encoders import JointEncoders
 from .wheeled import WheeledRobot

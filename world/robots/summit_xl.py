@@ -29,8 +29,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet
 
-from ..onboard import PlatformOnboard
 from ..estimation.ground import SKID_STEER_ODOMETRY
+from ..onboard import PlatformOnboard
 from .diff_drive import DiffDriveLimits
 from .wheeled import WheeledRobot
 
