@@ -52,7 +52,12 @@ class LiveSink:
         self._last_ns = -1
         self._stopped = False
         self.server = foxglove.start_server(
-            name=name, host=host, port=port, capabilities=[Capability.Time], server_listener=cast("ServerListener", self), context=self.context
+            name=name,
+            host=host,
+            port=port,
+            capabilities=[Capability.Time],
+            server_listener=cast("ServerListener", self),
+            context=self.context,
         )
 
     @property
