@@ -16,9 +16,10 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from marsupial.trees.campaign import run_campaign, summarize
 from rich.console import Console
 from rich.table import Table
+
+from marsupial.trees.campaign import run_campaign, summarize
 
 #: one printed table: title, column headers, rows of cell texts
 Section = tuple[str, Sequence[str], Sequence[Sequence[str]]]

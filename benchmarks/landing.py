@@ -69,13 +69,7 @@ from typing import Any
 
 import cv2
 import numpy as np
-
-from marsupial.geometry import heading_rotation, yaw_of
-from marsupial.skills.landing.detection import DetectionParams, detect_platform, tilt_of
-from marsupial.trees.replay import RunLog, read_log
-from marsupial.world import World
-
-from bench_common import (  # noqa: E402 (next to this script)
+from bench_common import (  # the module next to this script
     best_seconds,
     campaign,
     campaign_arguments,
@@ -83,6 +77,11 @@ from bench_common import (  # noqa: E402 (next to this script)
     print_tables,
     write_report,
 )
+
+from marsupial.geometry import heading_rotation, yaw_of
+from marsupial.skills.landing.detection import DetectionParams, detect_platform, tilt_of
+from marsupial.trees.replay import RunLog, read_log
+from marsupial.world import World
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_OUT = ROOT / "benchmarks" / "out" / "landing.json"

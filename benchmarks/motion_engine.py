@@ -36,13 +36,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from bench_common import best_seconds, machine_info, print_tables, write_report  # the module next to this script
 
 from marsupial.skills.uav_docking.engine import STAGES, MotionEngine
 from marsupial.skills.uav_docking.ik_engine import IKEngine
 from marsupial.world.kinematics import ArmKinematics
 from marsupial.world.robots.mobile_manipulator import ARM_POSES
-
-from bench_common import best_seconds, machine_info, print_tables, write_report  # noqa: E402 (next to this script)
 
 TARGET_P95_MS = 25.0
 TARGET_VERTICES = 300

@@ -62,8 +62,8 @@ from typing import Any
 import numpy as np
 import yaml
 
-from marsupial.skills.uav_docking.pose import UavPoseMeasurement
 from marsupial.geometry import rotation_matrix
+from marsupial.skills.uav_docking.pose import UavPoseMeasurement
 from marsupial.trees.mission import find_mission
 from marsupial.trees.replay import RunLog, read_log
 from marsupial.world import World
