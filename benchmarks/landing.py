@@ -260,7 +260,7 @@ def section_421(runs: Path, trials: int, workers: int, extra: dict[str, str] | N
         return [run_stats(r["log"]).summary() for r in campaign_logs(out)]
 
     with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-        runs_of = dict(zip(rows, pool.map(one, rows)))
+        runs_of = dict(zip(rows, pool.map(one, rows), strict=True))
     results: dict[str, Any] = {}
     for (track, _, label), stats in runs_of.items():
         results[f"{track}/{label}"] = {
@@ -308,7 +308,7 @@ def lifelong(runs: Path, cycles: dict[str, int], workers: int, paper_limit: floa
         return stats
 
     with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-        return dict(zip(cycles, pool.map(one, cycles)))
+        return dict(zip(cycles, pool.map(one, cycles), strict=True))
 
 
 def noise_sweep(runs: Path, cycles: int, workers: int) -> dict[str, Any]:
@@ -319,7 +319,7 @@ def noise_sweep(runs: Path, cycles: int, workers: int) -> dict[str, Any]:
         return {**lifelong_run(runs, overrides, cycles, SWEEP_SECONDS_PER_CYCLE * cycles), "noise_scale": scale}
 
     with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-        return {f"{scale:g}": stats for scale, stats in zip(SWEEP_NOISE_SCALES, pool.map(one, SWEEP_NOISE_SCALES))}
+        return {f"{scale:g}": stats for scale, stats in zip(SWEEP_NOISE_SCALES, pool.map(one, SWEEP_NOISE_SCALES), strict=True)}
 
 
 def detection_speed(repeats: int) -> dict[str, Any]:
@@ -337,7 +337,7 @@ def detection_speed(repeats: int) -> dict[str, Any]:
             tilt = tilt_of(uav.pose()[1])
             detection = detect_platform(frame.rgb, frame.K, Z, tilt, params)  # warm-up
 
-            def frames() -> None:
+            def frames(frame: Any = frame, Z: float = Z, tilt: float = tilt) -> None:
                 for _ in range(repeats):
                     detect_platform(frame.rgb, frame.K, Z, tilt, params)
 
@@ -371,7 +371,7 @@ def plots(results: dict[str, Any], img: Path) -> dict[str, str]:
         plt.close(fig)
         paths[name] = str(path)
 
-    for track, figs in (("linear", "6-7"), ("circular", "8-9")):
+    for track, _figs in (("linear", "6-7"), ("circular", "8-9")):
         fig_traj, axes_traj = plt.subplots(1, 2, figsize=(11, 4.2))
         fig_err, axes_err = plt.subplots(2, 2, figsize=(11, 5.5), sharex=True)
         for col, label in enumerate(("reactive", OURS)):

@@ -216,7 +216,7 @@ def bench_ik(quick: bool) -> dict[str, Any]:
             for workers in (1, 2):
                 with IKEngine(kinematics, solver=solver, workers=workers) as ik:  # type: ignore[arg-type]
                     ik.solve(positions[:8], np.eye(3), Q_READY)  # start the workers
-                    seconds = best_seconds(lambda: ik.solve(positions, np.eye(3), Q_READY), repeats)
+                    seconds = best_seconds(lambda ik=ik, positions=positions: ik.solve(positions, np.eye(3), Q_READY), repeats)
                     valid = float(ik.solve(positions, np.eye(3), Q_READY).valid.mean())
                 row[f"{workers}_worker"] = {"solves_per_s": size / seconds, "ms_per_batch": 1e3 * seconds, "valid": valid}
             row["scaling_2_vs_1"] = row["2_worker"]["solves_per_s"] / row["1_worker"]["solves_per_s"]

@@ -263,7 +263,7 @@ def pose_in_M_rms(log: RunLog) -> float | None:
     t_u, p_u = log.poses("uav")
     docked = [e["t"] for e in log.events_of("state_change") if e.get("phase") == "locked"]
     errors = []
-    for t, est in zip(t_e, estimate):
+    for t, est in zip(t_e, estimate, strict=True):
         if docked and t >= docked[0]:
             break
         i = int(np.argmin(np.abs(t_c - t)))  # the carrier turns slowly: the nearest logged rotation
@@ -449,7 +449,7 @@ def plots(stats: dict[str, Any], logs: dict[str, RunLog], img: Path) -> dict[str
     fig, axes = plt.subplots(2, len(dockings), figsize=(5.5 * len(dockings), 6), squeeze=False)
     for k, d in enumerate(dockings):
         a, b = d["locked_at_s"] - d["encounter_to_lock_s"], d["locked_at_s"]
-        for axis, color in zip("xyz", ("tab:green", "tab:purple", "tab:brown")):
+        for axis, color in zip("xyz", ("tab:green", "tab:purple", "tab:brown"), strict=True):
             t_a, v_a = log.metric("part_a_M", robot="uav", axis=axis)
             t_b, v_b = log.metric("part_b_M", robot="uav", axis=axis)
             sa, sb = (t_a >= a) & (t_a <= b), (t_b >= a) & (t_b <= b)
