@@ -369,29 +369,8 @@ def speed(runs: Path, quick: bool) -> dict[str, Any]:
 
 
 # ------------------------------------------------------------------ plots
-def plots(stats: dict[str, Any], logs: dict[str, RunLog], img: Path) -> dict[str, str]:
-    """Figs. 13, 15 and 20 as PNGs in ``img``; returns their paths relative to the report."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    img.mkdir(parents=True, exist_ok=True)
-    names: dict[str, str] = {}
-    run = stats["with_charging"]
-    log = logs["with_charging"]
-
-    def save(fig: Any, name: str) -> None:
-        fig.tight_layout()
-        fig.savefig(img / name, dpi=110)
-        plt.close(fig)
-        names[name] = f"img/{name}"
-
-    def shade(ax: Any) -> None:
-        for a, b in run["docked"]:
-            ax.axvspan(a, b, color="0.85", lw=0)
-
-    # Fig. 13: the map and the paths; grey where the UAV was on the carrier
+def _paths_figure(plt: Any, run: dict[str, Any], log: RunLog) -> Any:
+    """Fig. 13: the map and the paths; grey where the UAV was on the carrier."""
     fig, ax = plt.subplots(figsize=(9, 6.2))
     with World(scene="usar_building") as world:
         scene = world.scene
@@ -428,11 +407,14 @@ def plots(stats: dict[str, Any], logs: dict[str, RunLog], img: Path) -> dict[str
     ax.set_ylabel("y (m)")
     ax.set_title("usar_docking: paths (cf. Narváez et al. 2020, Fig. 13)")
     ax.legend(loc="upper left", fontsize=8, ncol=2)
-    save(fig, "uav_docking_paths.png")
+    return fig
 
-    # Fig. 15: battery over the mission, with and without charging
+
+def _battery_figure(plt: Any, stats: dict[str, Any], run: dict[str, Any]) -> Any:
+    """Fig. 15: battery over the mission, with and without charging."""
     fig, ax = plt.subplots(figsize=(8, 3.8))
-    shade(ax)
+    for a, b in run["docked"]:  # grey: docked / stored
+        ax.axvspan(a, b, color="0.85", lw=0)
     for label, color in (("with_charging", "tab:red"), ("without_charging", "tab:blue")):
         b = stats[label]["battery"]
         ax.plot(b["t"], 100.0 * np.asarray(b["soc"]), color=color, label=label.replace("_", " "))
@@ -440,12 +422,17 @@ def plots(stats: dict[str, Any], logs: dict[str, RunLog], img: Path) -> dict[str
     ax.set_ylabel("UAV battery (%)")
     ax.set_title("UAV battery (cf. Fig. 15); grey: UAV docked / stored")
     ax.legend()
-    save(fig, "uav_docking_battery.png")
+    return fig
 
-    # Fig. 20: Part B (marker side) and Part A (end effector) in M during each docking, and the gap
+
+def _tracking_figure(plt: Any, run: dict[str, Any], log: RunLog) -> Any | None:
+    """Fig. 20: Part B (marker side) and Part A (end effector) in M during each docking, and the gap.
+
+    ``None`` when no docking locked.
+    """
     dockings = run["dockings"]
     if not dockings:  # no docking locked: no tracking plot
-        return names
+        return None
     fig, axes = plt.subplots(2, len(dockings), figsize=(5.5 * len(dockings), 6), squeeze=False)
     for k, d in enumerate(dockings):
         a, b = d["locked_at_s"] - d["encounter_to_lock_s"], d["locked_at_s"]
@@ -467,7 +454,32 @@ def plots(stats: dict[str, Any], logs: dict[str, RunLog], img: Path) -> dict[str
         axes[1, k].set_xlabel("time since the initial encounter (s)")
         axes[0, k].legend(fontsize=7, ncol=2, loc="center right")
         axes[1, k].legend(fontsize=7, loc="upper right")
-    save(fig, "uav_docking_tracking.png")
+    return fig
+
+
+def plots(stats: dict[str, Any], logs: dict[str, RunLog], img: Path) -> dict[str, str]:
+    """Figs. 13, 15 and 20 as PNGs in ``img``; returns their paths relative to the report."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    img.mkdir(parents=True, exist_ok=True)
+    names: dict[str, str] = {}
+    run = stats["with_charging"]
+    log = logs["with_charging"]
+
+    def save(fig: Any, name: str) -> None:
+        fig.tight_layout()
+        fig.savefig(img / name, dpi=110)
+        plt.close(fig)
+        names[name] = f"img/{name}"
+
+    save(_paths_figure(plt, run, log), "uav_docking_paths.png")
+    save(_battery_figure(plt, stats, run), "uav_docking_battery.png")
+    tracking = _tracking_figure(plt, run, log)
+    if tracking is not None:
+        save(tracking, "uav_docking_tracking.png")
     return names
 
 
