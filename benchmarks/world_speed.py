@@ -295,15 +295,18 @@ def print_report(report: dict[str, Any]) -> None:
             "Physics (open_field, bebop2 + summit_xl)",
             ["what", "steps/s", "µs/step"],
             [
-                ["World.step (controllers on)", f"{physics['world_steps_per_s']:.0f}", f"{physics['world_us_per_step']:.1f}"],
-                ["bare pybullet.stepSimulation (gravity off)", f"{physics['bare_pybullet_steps_per_s']:.0f}", f"{physics['bare_pybullet_us_per_step']:.1f}"],
+                ["World.step (controllers on)", f"{physics['world_steps_per_s']:.0f}",
+                 f"{physics['world_us_per_step']:.1f}"],
+                ["bare pybullet.stepSimulation (gravity off)", f"{physics['bare_pybullet_steps_per_s']:.0f}",
+                 f"{physics['bare_pybullet_us_per_step']:.1f}"],
             ],
         ),
         (
             "Camera.measure: best frame, TinyRenderer alone, and the work after it (median)",
             ["view", "resolution", "ms/frame", "render ms", "post ms", "robot px %"],
             [
-                [r["view"], r["resolution"], f"{r['ms_per_frame']:.2f}", f"{r['render_ms']:.2f}", f"{r['post_ms']:.2f}", f"{r['robot_pixels_percent']:.1f}"]
+                [r["view"], r["resolution"], f"{r['ms_per_frame']:.2f}", f"{r['render_ms']:.2f}", f"{r['post_ms']:.2f}",
+                 f"{r['robot_pixels_percent']:.1f}"]
                 for r in report["cameras"]
             ],
         ),
@@ -311,7 +314,8 @@ def print_report(report: dict[str, Any]) -> None:
             "Onboard estimators, timed inside a run (wall µs)",
             ["update", "calls / sim s", "µs / call (median)", "µs / sim s"],
             [
-                [r["estimator"], f"{r['calls_per_sim_s']:.0f}", f"{r['median_us_per_call']:.1f}", f"{r['us_per_sim_s']:.0f}"]
+                [r["estimator"], f"{r['calls_per_sim_s']:.0f}", f"{r['median_us_per_call']:.1f}",
+                 f"{r['us_per_sim_s']:.0f}"]
                 for r in report["estimators"]
             ],
         ),
