@@ -16,9 +16,10 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from marsupial.trees.campaign import run_campaign, summarize
 from rich.console import Console
 from rich.table import Table
+
+from marsupial.trees.campaign import run_campaign, summarize
 
 #: one printed table: title, column headers, rows of cell texts
 Section = tuple[str, Sequence[str], Sequence[Sequence[str]]]
@@ -42,7 +43,8 @@ def campaign_arguments(description: str, quick_help: str, out: Path, report: Pat
     parser.add_argument("--runs", type=Path, default=None,
                         help="folder for the campaigns and their logs (default: a temporary one); a campaign already "
                              "finished there with the same plan is read back instead of run again")
-    parser.add_argument("--out", type=Path, default=out, help=f"JSON output (default {out.relative_to(out.parents[2])})")
+    parser.add_argument("--out", type=Path, default=out,
+                        help=f"JSON output (default {out.relative_to(out.parents[2])})")
     parser.add_argument("--report", type=Path, default=report, help="Markdown report (PNGs go to its img/ folder)")
     return parser
 
@@ -101,7 +103,8 @@ def _campaign_of_one_seed(mission: str, out: Path, overrides: dict[str, str], va
 
 def machine_info(**extra: Any) -> dict[str, Any]:
     """Python, platform, CPU count and load average (other processes slow every figure down), plus ``extra``."""
-    info: dict[str, Any] = {"python": platform.python_version(), "platform": platform.platform(), "cpus": os.cpu_count()}
+    info: dict[str, Any] = {"python": platform.python_version(), "platform": platform.platform(),
+                            "cpus": os.cpu_count()}
     info.update(extra)
     if hasattr(os, "getloadavg"):
         info["load_average_1_5_15min"] = [round(x, 2) for x in os.getloadavg()]

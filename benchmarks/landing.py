@@ -69,13 +69,7 @@ from typing import Any
 
 import cv2
 import numpy as np
-
-from marsupial.geometry import heading_rotation, yaw_of
-from marsupial.skills.landing.detection import DetectionParams, detect_platform, tilt_of
-from marsupial.trees.replay import RunLog, read_log
-from marsupial.world import World
-
-from bench_common import (  # noqa: E402 (next to this script)
+from bench_common import (  # the module next to this script
     best_seconds,
     campaign,
     campaign_arguments,
@@ -83,6 +77,11 @@ from bench_common import (  # noqa: E402 (next to this script)
     print_tables,
     write_report,
 )
+
+from marsupial.geometry import heading_rotation, yaw_of
+from marsupial.skills.landing.detection import DetectionParams, detect_platform, tilt_of
+from marsupial.trees.replay import RunLog, read_log
+from marsupial.world import World
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_OUT = ROOT / "benchmarks" / "out" / "landing.json"
@@ -119,7 +118,8 @@ REFERENCE = tuple(label for label in LIFELONG if label.endswith("noise_scale 0")
 PAPER_TIME_LIMIT_S = {NOMINAL_PAPER: 1072.41, DEMANDING_PAPER: 1249.09}
 SWEEP_NOISE_SCALES = (0.0, 0.5, 1.0, 2.0, 4.0)
 SWEEP_CYCLES = 10
-SWEEP_SECONDS_PER_CYCLE = 40.0  # sweep runs stop at this many simulated s per cycle (a cycle takes ≈23.5 s at the defaults)
+# sweep runs stop at this many simulated s per cycle (a cycle takes ≈23.5 s at the defaults)
+SWEEP_SECONDS_PER_CYCLE = 40.0
 # the paper's figures (§4.2.2 text and Fig. 10 for §4.2.1; Table 2 for §4.2.3)
 PAPER_421 = {
     ("linear", "reactive"): "x ≈ 0.10, y ≈ 0",
@@ -247,7 +247,8 @@ def campaign_logs(out: Path) -> list[dict[str, Any]]:
 
 
 # ------------------------------------------------------------------ experiments
-def section_421(runs: Path, trials: int, workers: int, extra: dict[str, str] | None = None, tag: str = "") -> dict[str, Any]:
+def section_421(runs: Path, trials: int, workers: int, extra: dict[str, str] | None = None,
+                tag: str = "") -> dict[str, Any]:
     """§4.2.1: linear and circular tracks × the controllers, ``trials`` seeds each (``extra``: more overrides).
 
     The campaigns run ``workers`` at a time, one process each.
@@ -261,7 +262,7 @@ def section_421(runs: Path, trials: int, workers: int, extra: dict[str, str] | N
         return [run_stats(r["log"]).summary() for r in campaign_logs(out)]
 
     with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-        runs_of = dict(zip(rows, pool.map(one, rows)))
+        runs_of = dict(zip(rows, pool.map(one, rows), strict=True))
     results: dict[str, Any] = {}
     for (track, _, label), stats in runs_of.items():
         results[f"{track}/{label}"] = {
@@ -290,8 +291,9 @@ def lifelong_run(runs: Path, overrides: dict[str, str], cycles: int, until: floa
     summary = campaign("landing_lifelong", 1, out, overrides={**overrides, "cycles": str(cycles)}, until=until)
     (record,) = campaign_logs(out)
     stats = run_stats(record["log"]).summary()
-    stats.update(cycles=cycles, time_limit_s=until, wall_time_s=record["wall_time"], campaign_outcome=summary["outcomes"],
-                 cpu_time_s=record["cpu_time"], real_time_factor_cpu=record["sim_time"] / record["cpu_time"])
+    stats.update(cycles=cycles, time_limit_s=until, wall_time_s=record["wall_time"],
+                 campaign_outcome=summary["outcomes"], cpu_time_s=record["cpu_time"],
+                 real_time_factor_cpu=record["sim_time"] / record["cpu_time"])
     return stats
 
 
@@ -309,7 +311,7 @@ def lifelong(runs: Path, cycles: dict[str, int], workers: int, paper_limit: floa
         return stats
 
     with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-        return dict(zip(cycles, pool.map(one, cycles)))
+        return dict(zip(cycles, pool.map(one, cycles), strict=True))
 
 
 def noise_sweep(runs: Path, cycles: int, workers: int) -> dict[str, Any]:
@@ -320,7 +322,8 @@ def noise_sweep(runs: Path, cycles: int, workers: int) -> dict[str, Any]:
         return {**lifelong_run(runs, overrides, cycles, SWEEP_SECONDS_PER_CYCLE * cycles), "noise_scale": scale}
 
     with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-        return {f"{scale:g}": stats for scale, stats in zip(SWEEP_NOISE_SCALES, pool.map(one, SWEEP_NOISE_SCALES))}
+        runs_of = zip(SWEEP_NOISE_SCALES, pool.map(one, SWEEP_NOISE_SCALES), strict=True)
+        return {f"{scale:g}": stats for scale, stats in runs_of}
 
 
 def detection_speed(repeats: int) -> dict[str, Any]:
@@ -338,7 +341,7 @@ def detection_speed(repeats: int) -> dict[str, Any]:
             tilt = tilt_of(uav.pose()[1])
             detection = detect_platform(frame.rgb, frame.K, Z, tilt, params)  # warm-up
 
-            def frames() -> None:
+            def frames(frame: Any = frame, Z: float = Z, tilt: float = tilt) -> None:
                 for _ in range(repeats):
                     detect_platform(frame.rgb, frame.K, Z, tilt, params)
 
@@ -372,7 +375,7 @@ def plots(results: dict[str, Any], img: Path) -> dict[str, str]:
         plt.close(fig)
         paths[name] = str(path)
 
-    for track, figs in (("linear", "6-7"), ("circular", "8-9")):
+    for track, _figs in (("linear", "6-7"), ("circular", "8-9")):
         fig_traj, axes_traj = plt.subplots(1, 2, figsize=(11, 4.2))
         fig_err, axes_err = plt.subplots(2, 2, figsize=(11, 5.5), sharex=True)
         for col, label in enumerate(("reactive", OURS)):
@@ -458,7 +461,8 @@ def verdicts(results: dict[str, Any], cycles: int) -> dict[str, tuple[bool, str]
             f"{demanding['landings']}/{cycles} cycles completed, {demanding['relocalizations']} re-localisations, "
             f"{demanding['ground_landings']} ground landings",
         ),
-        "421": (worst_421 <= 0.05 and better, f"ours: worst per-axis mean error {_m(worst_421)} m; prediction better: {better}"),
+        "421": (worst_421 <= 0.05 and better,
+                f"ours: worst per-axis mean error {_m(worst_421)} m; prediction better: {better}"),
         **({"gusts": (
             gusts["landings"] >= need and gusts["ground_landings"] == 0,
             f"{gusts['landings']}/{cycles} cycles landed ({gusts['cycles_landed_without_relocalization']} without "
@@ -482,14 +486,18 @@ def _row_cycles(r: dict[str, Any]) -> str:
 
 
 def lifelong_tables(life: dict[str, Any]) -> list[str]:
-    """Table 2 per speed: the paper's row, the paper's controller, ours and ours at noise_scale 0, from the same runs."""
+    """Table 2 per speed, from the same runs.
+
+    Rows: the paper's row, the paper's controller, ours and ours at noise_scale 0.
+    """
     lines: list[str] = []
-    header = ("| | cycles started | total test time | landed without re-localisation | re-localisations (while landing) "
-              "| landed in all (ground landings) | MAE x / y | max error x / y | landing error mean \\|x\\| / \\|y\\|, max |")
+    header = ("| | cycles started | total test time | landed without re-localisation "
+              "| re-localisations (while landing) | landed in all (ground landings) | MAE x / y | max error x / y "
+              "| landing error mean \\|x\\| / \\|y\\|, max |")
     for speed, paper in PAPER_TABLE2.items():
         lines += [f"### {speed}", "", header, "|---|---|---|---|---|---|---|---|---|",
-                  f"| paper (Table 2) | 50 | {paper['time']} | {paper['landed']} | {paper['reloc']} | – | {paper['mae']} "
-                  f"| {paper['max']} | – |"]
+                  f"| paper (Table 2) | 50 | {paper['time']} | {paper['landed']} | {paper['reloc']} | – "
+                  f"| {paper['mae']} | {paper['max']} | – |"]
         for label, r in sorted(life.items(), key=lambda item: not item[0].endswith(PAPER)):  # the paper's first
             if not label.startswith(speed) or label == GUSTY:
                 continue
@@ -498,15 +506,19 @@ def lifelong_tables(life: dict[str, Any]) -> list[str]:
             lines.append(
                 f"| {name} | {_row_cycles(r)} | {r['sim_time_s']:.1f} s | {r['cycles_landed_without_relocalization']}"
                 f"/{r['takeoffs']} ({100 * r['cycles_landed_without_relocalization'] / started:.0f} %) "
-                f"| {r['relocalizations']} ({r['relocalizations_while_landing']}) | {r['landings']} ({r['ground_landings']}) "
+                f"| {r['relocalizations']} ({r['relocalizations_while_landing']}) "
+                f"| {r['landings']} ({r['ground_landings']}) "
                 f"| {_m(r['mae_x_m'])} / {_m(r['mae_y_m'])} m | {_m(r['max_x_m'])} / {_m(r['max_y_m'])} m "
-                f"| {_m(r['landing_error_mean_x_m'])} / {_m(r['landing_error_mean_y_m'])}, {_m(r['landing_error_max_m'])} m |"
+                f"| {_m(r['landing_error_mean_x_m'])} / {_m(r['landing_error_mean_y_m'])}, "
+                f"{_m(r['landing_error_max_m'])} m |"
             )
         lines.append("")
     if GUSTY in life:
         r = life[GUSTY]
-        lines += [f"Robustness (not in the paper), {GUSTY}: {r['cycles_landed_without_relocalization']}/{r['takeoffs']} "
-                  f"landed without re-localisation, {r['landings']} landed in all, {r['relocalizations']} re-localisations, "
+        lines += [f"Robustness (not in the paper), {GUSTY}: "
+                  f"{r['cycles_landed_without_relocalization']}/{r['takeoffs']} "
+                  f"landed without re-localisation, {r['landings']} landed in all, "
+                  f"{r['relocalizations']} re-localisations, "
                   f"{r['ground_landings']} ground landings, MAE x / y {_m(r['mae_x_m'])} / {_m(r['mae_y_m'])} m.", ""]
     reasons = {label: r["relocalization_reasons"] for label, r in life.items() if r["relocalization_reasons"]}
     if reasons:
@@ -538,9 +550,9 @@ SEES = [
     "- **priors**: the platform's size; the simulated time.",
     "",
     "No controller reads a true pose, velocity or gap: `tests/test_sensing_boundary.py` enforces it. The UGV drives "
-    "its pattern as open-loop velocity commands (v, ω). `noise_scale` multiplies every noise, bias, drift, latency and drop "
-    "figure at once (0: perfect sensors and no latency, a reference only, never a result). The errors below are "
-    "scored on truth by the run's referee (`world/scoring.py`: `tracking_error_x` / `_y`, the platform centre "
+    "its pattern as open-loop velocity commands (v, ω). `noise_scale` multiplies every noise, bias, drift, latency "
+    "and drop figure at once (0: perfect sensors and no latency, a reference only, never a result). The errors below "
+    "are scored on truth by the run's referee (`world/scoring.py`: `tracking_error_x` / `_y`, the platform centre "
     "relative to the UAV in its true heading frame, 10 Hz while flying) and, for the landing error, from the logged "
     "true poses at each touchdown; the referee's figures never reach a skill.",
 ]
@@ -595,8 +607,10 @@ def what_was_run(results: dict[str, Any]) -> list[str]:
     """The counts of this run beside the full ones (``python benchmarks/landing.py --sweep``)."""
     life = results["lifelong"]
     ours = ", ".join(f"{label}: {r['cycles']} cycles" for label, r in life.items() if not label.endswith(PAPER))
-    paper = ", ".join(f"{label}: stopped at {r['time_limit_s']:.0f} s" for label, r in life.items() if label.endswith(PAPER))
-    sweep = (f"{len(results['sweep'])} points × {results['sweep_cycles']} cycles" if results.get("sweep") else "not run")
+    paper = ", ".join(f"{label}: stopped at {r['time_limit_s']:.0f} s"
+                      for label, r in life.items() if label.endswith(PAPER))
+    sweep = (f"{len(results['sweep'])} points × {results['sweep_cycles']} cycles" if results.get("sweep")
+             else "not run")
     full = (GUSTY in life and results["trials_421"] >= 5 and results.get("sweep_cycles", 0) >= SWEEP_CYCLES
             and all(r["cycles"] >= 50 for r in life.values())
             and all(life[label]["time_limit_s"] >= limit for label, limit in PAPER_TIME_LIMIT_S.items()))
@@ -620,7 +634,8 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path, cycles: 
     rel = {name: os.path.relpath(p, path.parent) for name, p in images.items()}
     checks = verdicts(results, cycles)
     machine = results["machine"]
-    limits = " and ".join(f"{limit:.0f} s at {label.split(', pred')[0]}" for label, limit in results["paper_time_limit_s"].items())
+    limits = " and ".join(f"{limit:.0f} s at {label.split(', pred')[0]}"
+                          for label, limit in results["paper_time_limit_s"].items())
     lines = [
         "# Landing on a moving platform (Palafox et al. 2019): results",
         "",
@@ -667,7 +682,8 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path, cycles: 
     ]
     if results.get("sweep"):
         lines += [
-            f"## Sensitivity to the sensing noise: ours, 0.5 m/s, 0.05 rad/s, {results['sweep_cycles']} cycles per point",
+            f"## Sensitivity to the sensing noise: ours, 0.5 m/s, 0.05 rad/s, "
+            f"{results['sweep_cycles']} cycles per point",
             "",
             "`world.sensing.noise_scale` multiplies every noise, bias, drift, latency and drop figure of the sensors "
             "and estimators (1: the documented defaults; 2 also doubles the video latency to 0.2 s).",
@@ -683,7 +699,8 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path, cycles: 
             lines.append(
                 f"| {scale} | {_row_cycles(r)} | {r['cycles_landed_without_relocalization']}/{r['takeoffs']} "
                 f"| {r['relocalizations']} | "
-                f"{r['ground_landings']} | {_m(r['mae_x_m'])} / {_m(r['mae_y_m'])} | {_m(r['max_x_m'])} / {_m(r['max_y_m'])} | "
+                f"{r['ground_landings']} | {_m(r['mae_x_m'])} / {_m(r['mae_y_m'])} "
+                f"| {_m(r['max_x_m'])} / {_m(r['max_y_m'])} | "
                 f"{_m(r['landing_error_max_m'])} |"
             )
         lines.append("")
@@ -696,7 +713,8 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path, cycles: 
         "takes off. Mean absolute error per run from take-off to touchdown, averaged over the runs. The paper's "
         "figures are read off its Fig. 10 and §4.2.2.",
         "",
-        "| track | controller | paper mean error (m) | ours MAE x (m) | ours MAE y (m) | landed | landing error x / y (m) | re-localisations |",
+        "| track | controller | paper mean error (m) | ours MAE x (m) | ours MAE y (m) | landed "
+        "| landing error x / y (m) | re-localisations |",
         "|---|---|---|---|---|---|---|---|",
     ]
     for row in results["421"].values():
@@ -737,11 +755,13 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path, cycles: 
             target = "≤ 3 ms (tracking height)" if height == "4.0 m" else "–"
             view = "cut by the border: completed square" if row["truncated"] else "in full view"
             lines.append(f"| Algorithm 1 at 320×240, platform {height} below ({view}) "
-                         f"| {row['ms_per_frame']:.2f} ms/frame (centre error {1000 * row['centre_error_m']:.1f} mm) | {target} |")
+                         f"| {row['ms_per_frame']:.2f} ms/frame "
+                         f"(centre error {1000 * row['centre_error_m']:.1f} mm) | {target} |")
     nominal = life[NOMINAL]
     lines += [
         f"| real-time factor of our 0.5 m/s life-long run, per CPU second of its own process "
-        f"| {nominal['real_time_factor_cpu']:.2f}× ({nominal['sim_time_s']:.0f} s simulated in {nominal['cpu_time_s']:.0f} CPU s) | ≥ 3× |",
+        f"| {nominal['real_time_factor_cpu']:.2f}× ({nominal['sim_time_s']:.0f} s simulated "
+        f"in {nominal['cpu_time_s']:.0f} CPU s) | ≥ 3× |",
         f"| same run, wall clock (the {machine['cpus']} CPUs shared with other processes) "
         f"| {nominal['real_time_factor']:.2f}× ({nominal['wall_time_s']:.0f} s) | |",
         "",
@@ -761,7 +781,8 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path, cycles: 
         "stopped at the paper's own test times, the gusty run): `python benchmarks/landing.py --sweep`.",
         "- Table 2 only, quickly: `python benchmarks/landing.py --quick` (1 run per §4.2.1 row, 5 cycles).",
         "- One life-long row by hand: `marsupial run landing_lifelong --set v=0.7 --set omega=0.07 "
-        "--set tracker.velocity_feedforward=false --until 400 --log paper_07.mcap` (the paper's controller at 0.7 m/s).",
+        "--set tracker.velocity_feedforward=false --until 400 --log paper_07.mcap` "
+        "(the paper's controller at 0.7 m/s).",
     ]
     text = "\n".join(lines) + "\n"
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -771,10 +792,16 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path, cycles: 
 
 # ------------------------------------------------------------------ main
 def main(argv: list[str] | None = None) -> dict[str, Any]:
-    """Run the experiments (or read back those finished in ``--runs``), write the JSON and the report, print the targets."""
-    parser = campaign_arguments(__doc__.split("\n\n")[0], "1 run per §4.2.1 variant, 5 life-long cycles", DEFAULT_OUT, DEFAULT_REPORT)
-    parser.add_argument("--sweep", action="store_true", help="also sweep world.sensing.noise_scale for ours (life-long runs)")
-    parser.add_argument("--trials", type=int, default=None, help="§4.2.1 runs (seeds) per track and controller (default 5)")
+    """Run the experiments (or read back those finished in ``--runs``), write the JSON and the report.
+
+    Prints the targets.
+    """
+    parser = campaign_arguments(__doc__.split("\n\n")[0], "1 run per §4.2.1 variant, 5 life-long cycles",
+                                DEFAULT_OUT, DEFAULT_REPORT)
+    parser.add_argument("--sweep", action="store_true",
+                        help="also sweep world.sensing.noise_scale for ours (life-long runs)")
+    parser.add_argument("--trials", type=int, default=None,
+                        help="§4.2.1 runs (seeds) per track and controller (default 5)")
     parser.add_argument("--cycles", type=int, default=None, help="cycles per life-long run (default 50, Table 2)")
     parser.add_argument("--sweep-cycles", type=int, default=None,
                         help=f"cycles per point of --sweep (default {SWEEP_CYCLES})")
@@ -783,7 +810,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
                              "(default: the paper's total test time, 1072.41 s at 0.5 m/s, 1249.09 s at 0.7 m/s)")
     parser.add_argument("--reference-cycles", type=int, default=None,
                         help="cycles of the noise_scale 0 life-long runs (default: --cycles)")
-    parser.add_argument("--no-gusts", action="store_true", help="leave out the robustness run (3 m/s gusts, frame drops)")
+    parser.add_argument("--no-gusts", action="store_true",
+                        help="leave out the robustness run (3 m/s gusts, frame drops)")
     args = parser.parse_args(argv)
     for name in ("trials", "cycles", "sweep_cycles", "reference_cycles", "workers"):
         if getattr(args, name) is not None and getattr(args, name) < 1:

@@ -36,13 +36,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from bench_common import best_seconds, machine_info, print_tables, write_report  # the module next to this script
 
 from marsupial.skills.uav_docking.engine import STAGES, MotionEngine
 from marsupial.skills.uav_docking.ik_engine import IKEngine
 from marsupial.world.kinematics import ArmKinematics
 from marsupial.world.robots.mobile_manipulator import ARM_POSES
-
-from bench_common import best_seconds, machine_info, print_tables, write_report  # noqa: E402 (next to this script)
 
 TARGET_P95_MS = 25.0
 TARGET_VERTICES = 300
@@ -137,7 +136,8 @@ def run_encounter(kinematics: ArmKinematics, spec: dict[str, Any], seconds: floa
     ugv_speed, uav_speed = spec["speeds"]
     T0 = _pose(np.array(spec["uav"](0.0)))
     q = engine.joint_goal(*engine.pbvs(T0), Q_READY)  # the arm starts under the UAV
-    cycles: dict[str, list[Any]] = {"stages": [], "wall": [], "vertices": [], "recycled": [], "toppra_ms": [], "toppra_wall_ms": []}
+    cycles: dict[str, list[Any]] = {"stages": [], "wall": [], "vertices": [], "recycled": [], "toppra_ms": [],
+                                    "toppra_wall_ms": []}
     for k in range(int(seconds * engine.params.f_O)):
         t = k / engine.params.f_O
         timer.start()
@@ -217,9 +217,11 @@ def bench_ik(quick: bool) -> dict[str, Any]:
             for workers in (1, 2):
                 with IKEngine(kinematics, solver=solver, workers=workers) as ik:  # type: ignore[arg-type]
                     ik.solve(positions[:8], np.eye(3), Q_READY)  # start the workers
-                    seconds = best_seconds(lambda: ik.solve(positions, np.eye(3), Q_READY), repeats)
+                    seconds = best_seconds(lambda ik=ik, positions=positions: ik.solve(positions, np.eye(3), Q_READY),
+                                           repeats)
                     valid = float(ik.solve(positions, np.eye(3), Q_READY).valid.mean())
-                row[f"{workers}_worker"] = {"solves_per_s": size / seconds, "ms_per_batch": 1e3 * seconds, "valid": valid}
+                row[f"{workers}_worker"] = {"solves_per_s": size / seconds, "ms_per_batch": 1e3 * seconds,
+                                            "valid": valid}
             row["scaling_2_vs_1"] = row["2_worker"]["solves_per_s"] / row["1_worker"]["solves_per_s"]
             results[solver][str(size)] = row
     return results
@@ -238,19 +240,22 @@ def print_report(report: dict[str, Any]) -> None:
             [
                 [name, str(e["cycles"]), f"{e['p50_ms']:.1f} ({e['wall_p50_ms']:.1f})",
                  f"{e['p95_ms']:.1f} ({e['wall_p95_ms']:.1f})",
-                 f"{e['min_valid_vertices']} / {e['median_valid_vertices']:.0f}", f"{e['median_recycled_vertices']:.0f}"]
+                 f"{e['min_valid_vertices']} / {e['median_valid_vertices']:.0f}",
+                 f"{e['median_recycled_vertices']:.0f}"]
                 for name, e in c["encounters"].items()
             ]
             + [["all", str(c["cycles"]), f"{c['p50_ms']:.1f} ({c['wall_p50_ms']:.1f})",
                 f"{c['p95_ms']:.1f} ({c['wall_p95_ms']:.1f})",
-                f"{c['min_valid_vertices']} / {c['median_valid_vertices']:.0f}", f"{c['median_recycled_vertices']:.0f}"],
+                f"{c['min_valid_vertices']} / {c['median_valid_vertices']:.0f}",
+                f"{c['median_recycled_vertices']:.0f}"],
                ["target", "", "", f"≤ {TARGET_P95_MS:.0f} {'ok' if ok else 'MISSED'}", f"≥ {TARGET_VERTICES}", ""]],
         ),
         (
             "Stages (CPU ms per cycle; 'graph' = IK engine + zone check + OMPL RRT*)",
             ["stage", "median ms", "p95 ms"],
             [[s, f"{c['stage_median_ms'][s]:.2f}", f"{c['stage_p95_ms'][s]:.2f}"] for s in CYCLE_STAGES]
-            + [["toppra trajectory (per selection, f_O)", f"{c['toppra_ms']['p50']:.2f}", f"{c['toppra_ms']['p95']:.2f}"]],
+            + [["toppra trajectory (per selection, f_O)", f"{c['toppra_ms']['p50']:.2f}",
+                f"{c['toppra_ms']['p95']:.2f}"]],
         ),
         (
             "IK engine (Algorithm 3), poses in a 24 cm cube, best of several runs",

@@ -94,11 +94,13 @@ def pin_to_one_core() -> str:
 def tree_mission(shape: str) -> str:
     """Mission text of a 200-node tree of trivial skills (``mission-like`` or ``all-ticked``)."""
     if shape == "mission-like":
-        sequence = "{sequence: [" + ", ".join(f"{{skill: trivial, params: {{ticks: {20 + 5 * (i % 4)}}}}}" for i in range(8)) + "]}"
+        skills = ", ".join(f"{{skill: trivial, params: {{ticks: {20 + 5 * (i % 4)}}}}}" for i in range(8))
+        sequence = "{sequence: [" + skills + "]}"
         children = "\n".join(f"    - {{repeat: {sequence}}}" for _ in range(20))
     else:
         children = "\n".join("    - {skill: trivial, params: {ticks: 0}}" for _ in range(199))
-    return f"mission: bench_{shape}\nplugins: {{trivial: {Path(__file__).stem}:Trivial}}\ntree:\n  parallel:\n{children}\n"
+    return (f"mission: bench_{shape}\nplugins: {{trivial: {Path(__file__).stem}:Trivial}}\n"
+            f"tree:\n  parallel:\n{children}\n")
 
 
 def ticks_per_second(shape: str, ticks: int, record: bool, repeats: int) -> dict[str, Any]:
@@ -155,7 +157,8 @@ tree:
 def time_in_recorder() -> Iterator[list[float]]:
     """Accumulate the wall time spent inside :class:`Recorder` (construction, every log call, close)."""
     spent = [0.0]
-    names = ("__init__", "close", "log_event", "log_metric", "log_text", "log_robot_poses", "log_tree", "log_scene", "log_image")
+    names = ("__init__", "close", "log_event", "log_metric", "log_text", "log_robot_poses", "log_tree", "log_scene",
+             "log_image")
     originals = {name: getattr(Recorder, name) for name in names}
 
     def timed(method: Callable[..., Any]) -> Callable[..., Any]:

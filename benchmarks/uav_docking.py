@@ -62,8 +62,8 @@ from typing import Any
 import numpy as np
 import yaml
 
-from marsupial.skills.uav_docking.pose import UavPoseMeasurement
 from marsupial.geometry import rotation_matrix
+from marsupial.skills.uav_docking.pose import UavPoseMeasurement
 from marsupial.trees.mission import find_mission
 from marsupial.trees.replay import RunLog, read_log
 from marsupial.world import World
@@ -104,7 +104,8 @@ MEETING_UAV = np.array([-0.11, 0.0, 1.53])  # the encounter mission's meeting po
 # ------------------------------------------------------------------ USAR mission
 def phase_events(log: RunLog, phase: str, skill: str | None = None) -> list[dict[str, Any]]:
     """The ``state_change`` events of ``phase`` (of ``skill`` if given), in time order."""
-    return [e for e in log.events_of("state_change") if e.get("phase") == phase and (skill is None or e.get("skill") == skill)]
+    return [e for e in log.events_of("state_change")
+            if e.get("phase") == phase and (skill is None or e.get("skill") == skill)]
 
 
 def intervals(starts: list[float], ends: list[float], stop: float) -> list[tuple[float, float]]:
@@ -128,7 +129,8 @@ def path_length(xyz: np.ndarray, t: np.ndarray, skip: list[tuple[float, float]] 
 def mission_stats(log: RunLog) -> dict[str, Any]:
     """Tables II-III of one ``usar_docking`` run: dockings, storage, energy, distances, times."""
     end = float(log.sim_time)
-    rendezvous = [e["t"] for e in log.events_of("state_change") if e.get("skill") == "rendezvous" and e.get("status") == "RUNNING"]
+    rendezvous = [e["t"] for e in log.events_of("state_change")
+                  if e.get("skill") == "rendezvous" and e.get("status") == "RUNNING"]
     dockings = []
     for locked in phase_events(log, "locked"):
         requested = max(t for t in rendezvous if t <= locked["t"])
@@ -182,7 +184,8 @@ def run_usar(runs: Path, workers: int) -> tuple[dict[str, Any], dict[str, RunLog
     records = json.loads((out / "trials.json").read_text())
     logs, stats = {}, {}
     for record in records:
-        label = "with_charging" if record["params"]["team.carrier.options.docking.charger"] == "true" else "without_charging"
+        charger = record["params"]["team.carrier.options.docking.charger"] == "true"
+        label = "with_charging" if charger else "without_charging"
         logs[label] = read_log(record["log"])
         stats[label] = mission_stats(logs[label])
         stats[label]["wall_time_s"] = record["wall_time"]
@@ -208,7 +211,9 @@ def encounter_grid(quick: bool, seed: int = 20) -> dict[str, list[str]]:
         x, y, z = MEETING_UAV + offset
         starts.append(f"[{x:.3f}, {y:.3f}, {z:.3f}, {rng.uniform(-math.pi, math.pi):.3f}]")
     speeds = [f"{v:.3f}" for v in rng.uniform(0.05, 0.5, 4)]
-    return {"team.uav.pose": starts[:4], "carrier_speed": speeds[:1]} if quick else {"team.uav.pose": starts, "carrier_speed": speeds}
+    if quick:
+        return {"team.uav.pose": starts[:4], "carrier_speed": speeds[:1]}
+    return {"team.uav.pose": starts, "carrier_speed": speeds}
 
 
 def run_encounters(runs: Path, workers: int, quick: bool, seeds: int) -> dict[str, Any]:
@@ -252,8 +257,11 @@ def _model_offsets() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def pose_in_M_rms(log: RunLog) -> float | None:
-    """RMS error (m) of the skills' P_Q^M position estimate (metric ``uav_M_estimate``, every tick while tracking) against
-    truth (the ``/truth/`` poses of both robots, interpolated, and M's URDF mount); ``None`` without samples."""
+    """RMS error (m) of the skills' P_Q^M position estimate against truth; ``None`` without samples.
+
+    The estimate: metric ``uav_M_estimate``, every tick while tracking. Truth: the ``/truth/`` poses of both
+    robots, interpolated, and M's URDF mount.
+    """
     if "uav_M_estimate" not in {m["name"] for m in log.metrics}:
         return None
     t_e, x = log.metric("uav_M_estimate", robot="uav", axis="x")
@@ -263,7 +271,7 @@ def pose_in_M_rms(log: RunLog) -> float | None:
     t_u, p_u = log.poses("uav")
     docked = [e["t"] for e in log.events_of("state_change") if e.get("phase") == "locked"]
     errors = []
-    for t, est in zip(t_e, estimate):
+    for t, est in zip(t_e, estimate, strict=True):
         if docked and t >= docked[0]:
             break
         i = int(np.argmin(np.abs(t_c - t)))  # the carrier turns slowly: the nearest logged rotation
@@ -301,8 +309,10 @@ def run_sweep(runs: Path, workers: int, name: str, seeds: int) -> list[dict[str,
     rows = []
     for value in values:
         overrides = {} if value == default else {key: value}
-        records = sweep_point(runs, workers, overrides, seeds, "sweep_default" if value == default else f"sweep_{name}_{value}")
-        times = [r["metrics"]["docking_time[uav]"] for r in records if r["success"] and "docking_time[uav]" in r["metrics"]]
+        folder = "sweep_default" if value == default else f"sweep_{name}_{value}"
+        records = sweep_point(runs, workers, overrides, seeds, folder)
+        times = [r["metrics"]["docking_time[uav]"] for r in records
+                 if r["success"] and "docking_time[uav]" in r["metrics"]]
         rms = [v for v in (pose_in_M_rms(read_log(r["log"])) for r in records if r["log"]) if v is not None]
         rows.append({
             "key": key, "value": value, "trials": len(records), "successes": sum(r["success"] for r in records),
@@ -325,7 +335,8 @@ def camera_and_detection(frames: int) -> dict[str, Any]:
         rows = {}
         with World(scene="usar_building", seed=1) as world:
             settings = {"eye_in_hand": {"width": width, "height": height, "rate_hz": 240.0}}
-            carrier = world.add_robot("mobile_manipulator", "carrier", pose=[-5, 0, 0], arm_pose="docking_ready", sensors=settings)
+            carrier = world.add_robot("mobile_manipulator", "carrier", pose=[-5, 0, 0], arm_pose="docking_ready",
+                                      sensors=settings)
             uav = world.add_robot("bebop2", "uav", pose=[-5, 0, 2.0, math.pi])
             measurement = UavPoseMeasurement(carrier.arm_kinematics, carrier.eye_in_hand.K)
             p_M_W = np.asarray(carrier.arm_base_pose()[0])
@@ -334,11 +345,13 @@ def camera_and_detection(frames: int) -> dict[str, Any]:
                 render, detect, errors = [], [], []
                 for k in range(frames):
                     jitter = 0.01 * np.array([math.cos(k), math.sin(k), 0.0])
-                    p_uav_W = p_M_W + p_C_M + np.array([0.005, 0.0, distance + 0.034]) + jitter  # plate centre over the camera
+                    # plate centre over the camera
+                    p_uav_W = p_M_W + p_C_M + np.array([0.005, 0.0, distance + 0.034]) + jitter
                     world.bullet.resetBasePositionAndOrientation(uav.body_id, p_uav_W.tolist(), [0, 0, 1, 0])
                     world.step(1 / 240)
                     t0 = time.perf_counter()
-                    frame = carrier.eye_in_hand.measure()  # one frame now (noise on; latency and drops are the stream's)
+                    # one frame now (noise on; latency and drops are the stream's)
+                    frame = carrier.eye_in_hand.measure()
                     t1 = time.perf_counter()
                     pose = measurement.measure(frame.rgb, carrier.joint_positions())
                     t2 = time.perf_counter()
@@ -362,36 +375,16 @@ def speed(runs: Path, quick: bool) -> dict[str, Any]:
     if cached.exists():
         print(f"reusing {cached}")
         return json.loads(cached.read_text())
-    figures = {"planning_cycle": motion_engine.bench_cycles(quick=True), "ik_engine": motion_engine.bench_ik(quick=quick),
+    figures = {"planning_cycle": motion_engine.bench_cycles(quick=True),
+               "ik_engine": motion_engine.bench_ik(quick=quick),
                "camera": camera_and_detection(frames=3 if quick else 10)}
     cached.write_text(json.dumps(figures, indent=2, default=float))
     return figures
 
 
 # ------------------------------------------------------------------ plots
-def plots(stats: dict[str, Any], logs: dict[str, RunLog], img: Path) -> dict[str, str]:
-    """Figs. 13, 15 and 20 as PNGs in ``img``; returns their paths relative to the report."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    img.mkdir(parents=True, exist_ok=True)
-    names: dict[str, str] = {}
-    run = stats["with_charging"]
-    log = logs["with_charging"]
-
-    def save(fig: Any, name: str) -> None:
-        fig.tight_layout()
-        fig.savefig(img / name, dpi=110)
-        plt.close(fig)
-        names[name] = f"img/{name}"
-
-    def shade(ax: Any) -> None:
-        for a, b in run["docked"]:
-            ax.axvspan(a, b, color="0.85", lw=0)
-
-    # Fig. 13: the map and the paths; grey where the UAV was on the carrier
+def _paths_figure(plt: Any, run: dict[str, Any], log: RunLog) -> Any:
+    """Fig. 13: the map and the paths; grey where the UAV was on the carrier."""
     fig, ax = plt.subplots(figsize=(9, 6.2))
     with World(scene="usar_building") as world:
         scene = world.scene
@@ -428,11 +421,14 @@ def plots(stats: dict[str, Any], logs: dict[str, RunLog], img: Path) -> dict[str
     ax.set_ylabel("y (m)")
     ax.set_title("usar_docking: paths (cf. Narváez et al. 2020, Fig. 13)")
     ax.legend(loc="upper left", fontsize=8, ncol=2)
-    save(fig, "uav_docking_paths.png")
+    return fig
 
-    # Fig. 15: battery over the mission, with and without charging
+
+def _battery_figure(plt: Any, stats: dict[str, Any], run: dict[str, Any]) -> Any:
+    """Fig. 15: battery over the mission, with and without charging."""
     fig, ax = plt.subplots(figsize=(8, 3.8))
-    shade(ax)
+    for a, b in run["docked"]:  # grey: docked / stored
+        ax.axvspan(a, b, color="0.85", lw=0)
     for label, color in (("with_charging", "tab:red"), ("without_charging", "tab:blue")):
         b = stats[label]["battery"]
         ax.plot(b["t"], 100.0 * np.asarray(b["soc"]), color=color, label=label.replace("_", " "))
@@ -440,16 +436,21 @@ def plots(stats: dict[str, Any], logs: dict[str, RunLog], img: Path) -> dict[str
     ax.set_ylabel("UAV battery (%)")
     ax.set_title("UAV battery (cf. Fig. 15); grey: UAV docked / stored")
     ax.legend()
-    save(fig, "uav_docking_battery.png")
+    return fig
 
-    # Fig. 20: Part B (marker side) and Part A (end effector) in M during each docking, and the gap
+
+def _tracking_figure(plt: Any, run: dict[str, Any], log: RunLog) -> Any | None:
+    """Fig. 20: Part B (marker side) and Part A (end effector) in M during each docking, and the gap.
+
+    ``None`` when no docking locked.
+    """
     dockings = run["dockings"]
     if not dockings:  # no docking locked: no tracking plot
-        return names
+        return None
     fig, axes = plt.subplots(2, len(dockings), figsize=(5.5 * len(dockings), 6), squeeze=False)
     for k, d in enumerate(dockings):
         a, b = d["locked_at_s"] - d["encounter_to_lock_s"], d["locked_at_s"]
-        for axis, color in zip("xyz", ("tab:green", "tab:purple", "tab:brown")):
+        for axis, color in zip("xyz", ("tab:green", "tab:purple", "tab:brown"), strict=True):
             t_a, v_a = log.metric("part_a_M", robot="uav", axis=axis)
             t_b, v_b = log.metric("part_b_M", robot="uav", axis=axis)
             sa, sb = (t_a >= a) & (t_a <= b), (t_b >= a) & (t_b <= b)
@@ -460,14 +461,40 @@ def plots(stats: dict[str, Any], logs: dict[str, RunLog], img: Path) -> dict[str
         axes[1, k].plot(t_g[sg] - a, 100.0 * gap[sg], color="k", label="|P_B − P_A| (estimate)")
         t_o, offset = log.metric("camera_offset", robot="uav")
         so = (t_o >= a) & (t_o <= b)
-        axes[1, k].plot(t_o[so] - a, 100.0 * offset[so], ".", color="tab:red", ms=3, label="marker off the optical axis")
+        axes[1, k].plot(t_o[so] - a, 100.0 * offset[so], ".", color="tab:red", ms=3,
+                        label="marker off the optical axis")
         axes[0, k].set_title(f"docking {k + 1}: {d['encounter_to_lock_s']:.1f} s from the encounter to the lock")
         axes[0, k].set_ylabel("position in M (m)")
         axes[1, k].set_ylabel("cm")
         axes[1, k].set_xlabel("time since the initial encounter (s)")
         axes[0, k].legend(fontsize=7, ncol=2, loc="center right")
         axes[1, k].legend(fontsize=7, loc="upper right")
-    save(fig, "uav_docking_tracking.png")
+    return fig
+
+
+def plots(stats: dict[str, Any], logs: dict[str, RunLog], img: Path) -> dict[str, str]:
+    """Figs. 13, 15 and 20 as PNGs in ``img``; returns their paths relative to the report."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    img.mkdir(parents=True, exist_ok=True)
+    names: dict[str, str] = {}
+    run = stats["with_charging"]
+    log = logs["with_charging"]
+
+    def save(fig: Any, name: str) -> None:
+        fig.tight_layout()
+        fig.savefig(img / name, dpi=110)
+        plt.close(fig)
+        names[name] = f"img/{name}"
+
+    save(_paths_figure(plt, run, log), "uav_docking_paths.png")
+    save(_battery_figure(plt, stats, run), "uav_docking_battery.png")
+    tracking = _tracking_figure(plt, run, log)
+    if tracking is not None:
+        save(tracking, "uav_docking_tracking.png")
     return names
 
 
@@ -494,7 +521,8 @@ def verdicts(results: dict[str, Any]) -> dict[str, tuple[bool, str]]:
     return {
         **mission,
         f"encounters ≥ {TARGETS['encounter_successes']}/100, no unintended contact": (
-            enc["successes"] * 100 >= TARGETS["encounter_successes"] * enc["trials"] and enc["unintended_contacts"] == 0,
+            enc["successes"] * 100 >= TARGETS["encounter_successes"] * enc["trials"]
+            and enc["unintended_contacts"] == 0,
             f"{enc['successes']}/{enc['trials']}, {enc['unintended_contacts']} contacts"),
         "planning cycle p95 ≤ 25 ms (one core), ≥ 300 vertices": (
             cycle["p95_ms"] <= TARGETS["cycle_p95_ms"] and cycle["min_valid_vertices"] >= 300,
@@ -536,8 +564,10 @@ def mission_tables(results: dict[str, Any]) -> list[tuple[str, list[str], list[l
         ["UAV operation (flight) time (s)", _f(PAPER["uav_operation_s"]), _f(w["uav_operation_s"])],
         ["UAV energy consumed (mAh)", _f(PAPER["consumed_mAh"]), _f(w["consumed_mAh"])],
         ["UAV energy recovered by charging (mAh)", _f(PAPER["recovered_mAh"]), _f(w["recovered_mAh"])],
-        ["Battery at the end, without charging (%)", _f(PAPER["battery_without_percent"], 2), _f(wo["battery_end_percent"], 2)],
-        ["Battery at the end, with charging (%)", _f(PAPER["battery_with_percent"], 2), _f(w["battery_end_percent"], 2)],
+        ["Battery at the end, without charging (%)", _f(PAPER["battery_without_percent"], 2),
+         _f(wo["battery_end_percent"], 2)],
+        ["Battery at the end, with charging (%)", _f(PAPER["battery_with_percent"], 2),
+         _f(w["battery_end_percent"], 2)],
         ["Saving (points of battery)", _f(PAPER["battery_with_percent"] - PAPER["battery_without_percent"], 2),
          _f(w["battery_end_percent"] - wo["battery_end_percent"], 2)],
     ]
@@ -553,8 +583,10 @@ def tables(results: dict[str, Any]) -> list[tuple[str, list[str], list[list[str]
     t = enc["encounter_to_lock_s"]
     encounters = [
         ["successes (locked and stored ≤ 60 s)", "2 of 2 (simulation)",
-         f"{enc['successes']}/{enc['trials']} (Wilson 95 %: {100 * enc['success_rate_ci95'][0]:.0f}–{100 * enc['success_rate_ci95'][1]:.0f} %)"],
-        ["unintended UAV–carrier contacts (trials)", "—", f"{enc['unintended_contacts']} ({enc['trials_with_contacts']})"],
+         f"{enc['successes']}/{enc['trials']} (Wilson 95 %: {100 * enc['success_rate_ci95'][0]:.0f}–"
+         f"{100 * enc['success_rate_ci95'][1]:.0f} %)"],
+        ["unintended UAV–carrier contacts (trials)", "—",
+         f"{enc['unintended_contacts']} ({enc['trials_with_contacts']})"],
         ["encounter → lock, median / p95 / max (s)", "—", f"{_f(t['median'])} / {_f(t['p95'])} / {_f(t['max'])}"],
         ["RMS error of P_Q^M (estimate vs truth) while tracking, median / max run (cm)", "—",
          f"{_f(_cm(enc['pose_in_M_rms_m']['median']))} / {_f(_cm(enc['pose_in_M_rms_m']['max']))}"],
@@ -566,8 +598,10 @@ def tables(results: dict[str, Any]) -> list[tuple[str, list[str], list[list[str]
     ]
     c = results["planning_cycle"]
     speed = [
-        ["planning cycle p50 / p95 (CPU ms, one core)", "f_B = 4 Hz (250 ms)", f"{c['p50_ms']:.1f} / {c['p95_ms']:.1f}"],
-        ["valid vertices per cycle (min / median)", "several hundred", f"{c['min_valid_vertices']} / {c['median_valid_vertices']:.0f}"],
+        ["planning cycle p50 / p95 (CPU ms, one core)", "f_B = 4 Hz (250 ms)",
+         f"{c['p50_ms']:.1f} / {c['p95_ms']:.1f}"],
+        ["valid vertices per cycle (min / median)", "several hundred",
+         f"{c['min_valid_vertices']} / {c['median_valid_vertices']:.0f}"],
     ] + [
         [f"IK engine {solver}, batch {size}: solves/s 1 / 2 workers", "M threads",
          f"{r['1_worker']['solves_per_s']:,.0f} / {r['2_worker']['solves_per_s']:,.0f} ({r['scaling_2_vs_1']:.2f}×)"]
@@ -675,7 +709,10 @@ def what_was_run(results: dict[str, Any]) -> list[str]:
 
 
 def report(results: dict[str, Any], images: dict[str, str], path: Path) -> str:
-    """Write the Markdown report: what the skills see, targets, tables, departures and the commands; returns its text."""
+    """Write the Markdown report; returns its text.
+
+    Its parts: what the skills see, targets, tables, departures and the commands.
+    """
     verdict = verdicts(results)
     machine = results["machine"]
     enc = results["encounters"]
@@ -696,7 +733,8 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path) -> str:
         "",
         "## Targets",
         "",
-        markdown_table(["target", "measured", "met"], [[k, m, "yes" if ok else "**no**"] for k, (ok, m) in verdict.items()]),
+        markdown_table(["target", "measured", "met"],
+                       [[k, m, "yes" if ok else "**no**"] for k, (ok, m) in verdict.items()]),
         "",
     ]
     if "usar" in results:
@@ -735,9 +773,10 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path) -> str:
                       "runs of each run's RMS error while tracking. "
                       "`world.sensing.noise_scale` multiplies every noise, bias, drift, latency and drop figure of "
                       "both robots' sensors, estimators and the team link (0: perfect sensors, 1: the defaults); "
-                      "`team.uav.sensors={flow: {noise_std: …}}` sets the UAV's optical-flow velocity noise (m/s, default "
-                      "0.02), the source of its odometry drift. The default point of both sweeps is the matching "
-                      "part of the randomized encounters above (the same starts, speed and seeds).", "", markdown_table(header, rows), ""]
+                      "`team.uav.sensors={flow: {noise_std: …}}` sets the UAV's optical-flow velocity noise "
+                      "(m/s, default 0.02), the source of its odometry drift. The default point of both sweeps is "
+                      "the matching part of the randomized encounters above (the same starts, speed and seeds).",
+                      "", markdown_table(header, rows), ""]
         else:
             parts += [f"### {title}", "", markdown_table(header, rows), ""]
     ik = results["ik_engine"]["closed_form"]
@@ -797,10 +836,13 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path) -> str:
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Run everything, write the JSON and the report, print the tables; returns the results."""
-    parser = campaign_arguments(__doc__.split("\n\n")[0], "20 encounters, quick speed figures", DEFAULT_OUT, DEFAULT_REPORT)
+    parser = campaign_arguments(__doc__.split("\n\n")[0], "20 encounters, quick speed figures",
+                                DEFAULT_OUT, DEFAULT_REPORT)
     parser.add_argument("--sweep", choices=(*SWEEPS, "all"), default=None,
-                        help="also run the sensitivity sweep(s): noise_scale (noise) or the UAV's odometry drift (drift)")
-    parser.add_argument("--sweep-seeds", type=int, default=5, help="seeds per sweep point (× 4 starts; default 5 = 20 encounters)")
+                        help="also run the sensitivity sweep(s): noise_scale (noise) "
+                             "or the UAV's odometry drift (drift)")
+    parser.add_argument("--sweep-seeds", type=int, default=5,
+                        help="seeds per sweep point (× 4 starts; default 5 = 20 encounters)")
     parser.add_argument("--drift-seeds", type=int, default=None,
                         help="seeds per point of the drift sweep (default: --sweep-seeds)")
     parser.add_argument("--encounter-seeds", type=int, default=5,
@@ -832,17 +874,17 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         if not args.no_mission:
             results["usar"], logs = run_usar(runs, args.workers)
             run = results["usar"]["with_charging"]
-            results["rtf"] = {"outcome": run["outcome"], "sim_time_s": run["mission_s"], "cpu_time_s": run["cpu_time_s"],
-                              "wall_time_s": run["wall_time_s"], "rtf": run["mission_s"] / run["cpu_time_s"]}
+            results["rtf"] = {"outcome": run["outcome"], "sim_time_s": run["mission_s"],
+                              "cpu_time_s": run["cpu_time_s"], "wall_time_s": run["wall_time_s"],
+                              "rtf": run["mission_s"] / run["cpu_time_s"]}
             images = plots(results["usar"], logs, args.report.parent / "img")
         results["benchmark_wall_time_s"] = time.perf_counter() - started
         report(results, images, args.report)
         results["targets"] = {k: {"met": ok, "measured": m} for k, (ok, m) in verdicts(results).items()}
         for label in results.get("usar", {}):
             results["usar"][label].pop("battery")  # in the plot; the JSON keeps the summaries
-    print_tables(tables(results) + [("Targets", ["target", "measured", "met"],
-                                     [[k, v["measured"], "yes" if v["met"] else "NO"] for k, v in results["targets"].items()])],
-                 results["machine"])
+    targets = [[k, v["measured"], "yes" if v["met"] else "NO"] for k, v in results["targets"].items()]
+    print_tables(tables(results) + [("Targets", ["target", "measured", "met"], targets)], results["machine"])
     print(f"report: {args.report}")
     write_report(results, args.out)
     return results

@@ -51,12 +51,11 @@ from typing import Any
 import cv2
 import numpy as np
 import pybullet
+from bench_common import best_seconds, machine_info, print_tables, write_report  # the module next to this script
 
 from marsupial.world import World
 from marsupial.world.sensors.base import SensorConfig
 from marsupial.world.sensors.camera import Camera, Intrinsics
-
-from bench_common import best_seconds, machine_info, print_tables, write_report  # noqa: E402 (next to this script)
 
 TARGET_RTF_WITHOUT_CAMERA = 50.0
 TARGET_RTF_WITH_CAMERA = 3.0
@@ -296,15 +295,18 @@ def print_report(report: dict[str, Any]) -> None:
             "Physics (open_field, bebop2 + summit_xl)",
             ["what", "steps/s", "µs/step"],
             [
-                ["World.step (controllers on)", f"{physics['world_steps_per_s']:.0f}", f"{physics['world_us_per_step']:.1f}"],
-                ["bare pybullet.stepSimulation (gravity off)", f"{physics['bare_pybullet_steps_per_s']:.0f}", f"{physics['bare_pybullet_us_per_step']:.1f}"],
+                ["World.step (controllers on)", f"{physics['world_steps_per_s']:.0f}",
+                 f"{physics['world_us_per_step']:.1f}"],
+                ["bare pybullet.stepSimulation (gravity off)", f"{physics['bare_pybullet_steps_per_s']:.0f}",
+                 f"{physics['bare_pybullet_us_per_step']:.1f}"],
             ],
         ),
         (
             "Camera.measure: best frame, TinyRenderer alone, and the work after it (median)",
             ["view", "resolution", "ms/frame", "render ms", "post ms", "robot px %"],
             [
-                [r["view"], r["resolution"], f"{r['ms_per_frame']:.2f}", f"{r['render_ms']:.2f}", f"{r['post_ms']:.2f}", f"{r['robot_pixels_percent']:.1f}"]
+                [r["view"], r["resolution"], f"{r['ms_per_frame']:.2f}", f"{r['render_ms']:.2f}", f"{r['post_ms']:.2f}",
+                 f"{r['robot_pixels_percent']:.1f}"]
                 for r in report["cameras"]
             ],
         ),
@@ -312,7 +314,8 @@ def print_report(report: dict[str, Any]) -> None:
             "Onboard estimators, timed inside a run (wall µs)",
             ["update", "calls / sim s", "µs / call (median)", "µs / sim s"],
             [
-                [r["estimator"], f"{r['calls_per_sim_s']:.0f}", f"{r['median_us_per_call']:.1f}", f"{r['us_per_sim_s']:.0f}"]
+                [r["estimator"], f"{r['calls_per_sim_s']:.0f}", f"{r['median_us_per_call']:.1f}",
+                 f"{r['us_per_sim_s']:.0f}"]
                 for r in report["estimators"]
             ],
         ),
