@@ -101,10 +101,9 @@ class Priorities(py_trees.composites.Selector):
 
 def stop_text(leaf: Behaviour) -> str | None:
     """How a stopped leaf left its robot: ``"safe_stop"``, ``"kept by <node>"``, ``None`` (no robot, or not a skill)."""
-    skill = leaf
-    if not isinstance(skill, Skill) or not skill.uses_robot or skill.robot_name is None:
+    if not isinstance(leaf, Skill) or not leaf.uses_robot or leaf.robot_name is None:
         return None
-    return "safe_stop" if skill.stopped_by is None else f"kept by {skill.stopped_by.node_name}"
+    return "safe_stop" if leaf.stopped_by is None else f"kept by {leaf.stopped_by.node_name}"
 
 
 class SimTimeout(py_trees.decorators.Decorator):
