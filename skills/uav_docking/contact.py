@@ -70,12 +70,14 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
+import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.trees.skill import Condition, NodeParams, Skill
 from marsupial.world.capabilities import Rotorcraft
 
+from .gust_guard import GuardLimits, GustGuard
 from .pose import invert
 from .relative_hold import PART_A_LINK, part_b_transform
 from .selection import yaw_of_rotation
@@ -84,6 +86,7 @@ from .track import CONTACT_TARGET, TRACKING, ContactTarget, TrackingState
 
 CAPTURE_TIME = 1.0  # s the magnet may take to bring Part B into contact before the capture is retried
 SETTLED_SPEED = 0.01  # m/s: Part A counts as holding still below Part B (the magnet is not switched on a moving arm)
+GUARD_MARGIN = 0.02  # m above guard_gap within which a guarded approach stays guarded (estimate noise)
 K_C = 0.18  # m, k_c of eq. (15): the paper prints no value; chosen so a 0.35 m gap closes in 6 s (2.6 cm/s at the end)
 
 
@@ -113,7 +116,7 @@ class Contact(Skill["Contact.Params"]):
         """Gap (m) between Part A and Part B below which an unseen marker is expected (the camera is too close)."""
         lost_timeout: float = Field(0.3, gt=0.0)
         """Time (s) without the marker, farther than ``blind_range``, that cancels the contact."""
-        blind_timeout: float = Field(6.0, gt=0.0)
+        blind_timeout: float = Field(2.0, gt=0.0)
         """Time (s) without the marker, within ``blind_range``, that cancels the contact.
 
         It bounds the estimates' drift since the last frame.
@@ -140,6 +143,14 @@ class Contact(Skill["Contact.Params"]):
 
         Down to ``-2·capture_step`` below the estimated face.
         """
+        guard_gap: float = Field(0.08, ge=0.0)
+        """Gap (m) Part A backs off to while the UAV is unsteady (the gust guard, :mod:`.gust_guard`; 0: off)."""
+        guard_lateral: float = Field(0.025, gt=0.0)
+        """Lateral offset (m) of Part B from Part A's axis that makes the UAV unsteady (within ``guard_gap``)."""
+        guard_speed: float = Field(0.15, gt=0.0)
+        """UAV speed relative to M (m/s, its estimate) that makes it unsteady (within ``guard_gap``)."""
+        guard_calm_time: float = Field(0.5, ge=0.0)
+        """Time (s) the UAV must stay within both limits before the approach resumes."""
         sonar_cone: bool = True
         """Map the UAV's downward range-finder cone as a prohibited zone (§IV-B)."""
         timeout: float = Field(30.0, gt=0.0)
@@ -230,6 +241,7 @@ class Contact(Skill["Contact.Params"]):
         self.phase, self.t0, self.s0 = "approach", now, float(state.p_B_A[2])
         self.t_c, self.last_t = 0.0, now
         self.last_axial, self.last_tick = math.inf, now
+        self.guard = GustGuard(GuardLimits(p.guard_lateral, p.guard_speed, p.guard_calm_time))
         self.cone = None  # the sonar beam, from the UAV down to the floor (§IV-B)
         if p.sonar_cone:  # the beam down to its echo (the floor), as the sonar reads it
             reading = self.robot.sensor("sonar").read()
@@ -256,17 +268,12 @@ class Contact(Skill["Contact.Params"]):
             return self.cancel(reason)
         lateral = math.hypot(float(p_B_A[0]), float(p_B_A[1]))
         aligned = lateral <= p.align_tolerance
-        if aligned or self.s0 - p.k_c * math.log(self.t_c + 1.0) > p.align_gap:  # the contact clock t_c
-            self.t_c += now - self.last_t
-        self.last_t = now
-        rest = max(p.rest_gap - p.capture_step * self.failed_captures, -2.0 * p.capture_step)
-        standoff = max(self.s0 - p.k_c * math.log(self.t_c + 1.0), rest)  # eq. (15) as the gap P_RC leaves
-        if not aligned:
-            standoff = max(standoff, p.align_gap)
+        unsteady = self.supervise(now, gap, lateral, state)
+        standoff = self.standoff(now, aligned, unsteady)
         settled = abs(gap - self.last_axial) <= SETTLED_SPEED * max(now - self.last_tick, 1e-9)
         self.last_axial, self.last_tick = gap, now
         switch = self.device.contact_switch
-        if self.phase == "approach" and (switch or (gap <= p.D_c and aligned and settled)):
+        if self.phase == "approach" and (switch or (gap <= p.D_c and aligned and settled and not unsteady)):
             self.device.magnet_on()  # Fig. 12b: Part A holds still at D_c, the magnet forces the initial contact
             self.phase, self.captured_at = "capture", now
             phase_event(self, "capture", t_c=round(self.t_c, 3), gap_estimate=round(gap, 4), contact_switch=switch)
@@ -290,6 +297,53 @@ class Contact(Skill["Contact.Params"]):
             f"{self.phase}: t_c {self.t_c:.1f} s, estimated gap {gap:.3f} m (target {standoff:.3f} m)"
         )
         return Status.RUNNING
+
+    def standoff(self, now: float, aligned: bool, unsteady: bool) -> float:
+        """The gap (m) Part A leaves below Part B now: eq. (15) on the contact clock t_c, held by the supervision.
+
+        The clock stops while the last ``align_gap`` would be closed on a misaligned Part B, and while the UAV
+        is unsteady (then the gap is at least ``guard_gap``).
+        """
+        p = self.params
+        closing = self.s0 - p.k_c * math.log(self.t_c + 1.0) > p.align_gap
+        if not unsteady and (aligned or closing):
+            self.t_c += now - self.last_t
+        self.last_t = now
+        rest = max(p.rest_gap - p.capture_step * self.failed_captures, -2.0 * p.capture_step)
+        standoff = max(self.s0 - p.k_c * math.log(self.t_c + 1.0), rest)  # eq. (15) as the gap P_RC leaves
+        if not aligned:
+            standoff = max(standoff, p.align_gap)
+        if unsteady:
+            standoff = max(standoff, p.guard_gap)
+        return standoff
+
+    def supervise(self, now: float, gap: float, lateral: float, state: TrackingState) -> bool:
+        """The gust guard (:mod:`.gust_guard`): True while Part A must keep ``guard_gap`` below an unsteady UAV.
+
+        A capture under way whose contact switch is still open is abandoned (magnet off), not counted as failed;
+        once the switch closed (Part B seated on the magnet) or the levers close, the guard no longer acts.
+        """
+        p = self.params
+        if p.guard_gap <= 0.0 or self.phase == "locking" or self.device.contact_switch:
+            return False
+        was = self.guard.unsteady_since is not None
+        near = gap <= p.guard_gap + (GUARD_MARGIN if was else 0.0)  # farther down, a shove cannot reach Part A
+        speed = float(np.linalg.norm(state.v_M))
+        unsteady = self.guard.update(now, lateral if near else 0.0, speed if near else 0.0)
+        if unsteady and not was:
+            if self.phase == "capture" and not self.device.contact_switch:
+                self.device.magnet_off()
+                self.phase = "approach"
+            self.guard_event("unsteady", why=self.guard.reason, gap_estimate=round(gap, 4))
+        elif was and not unsteady:
+            self.guard_event("calm", gap_estimate=round(gap, 4))
+        return unsteady
+
+    def guard_event(self, guard: str, **fields: object) -> None:
+        """Record a change of the gust guard: a ``state_change`` event with ``guard`` and no ``phase`` (it stays)."""
+        self.context.event(
+            "state_change", node=self.name, skill=self.kind, robot=self.robot_name, guard=guard, **fields
+        )
 
     def cancel_reason(self, state: TrackingState, gap: float) -> str | None:
         """Why the approach stops now (marker unseen too long at this ``gap`` in m, no lock in time), else ``None``."""

@@ -31,9 +31,7 @@ the frame's stamp is compared with the measurement and ``C`` moves toward
 it by a gain; a measurement too far from the prediction is an outlier. Only
 the drift since the last frame adds to the error while the marker is hidden.
 
-External vision fix (opt-in, ``vision_fixes=True``; off by default because
-it measured worse: 24/25 encounters locked with 26 unintended contacts
-against 10/10 with none without it, see the issue notes): each frame
+External vision fix (``vision_fixes=True``, the ``track`` default): each frame
 accepted by the filter is also sent to the UAV over the team link (:class:`~marsupial.world.onboard.VisionFix` on
 ``<uav>/vision_fix``): the UAV base's pose in the frame of the carrier's
 estimate, ``T_map_M(t_k) · P_Q^M(t_k)``, the camera's measurement composed

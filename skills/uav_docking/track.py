@@ -110,6 +110,7 @@ class TrackingState:
             kinematics: ``[2]`` is the axial gap, ``hypot([0], [1])`` the lateral offset.
         hold_error: distance (m) of that UAV pose from its hold pose in M.
         camera_offset: distance (m) of the tag plate's centre from the camera's optical axis.
+        v_M: the UAV's estimated velocity relative to frame M, in M's axes (m/s).
     """
 
     t: float
@@ -120,6 +121,7 @@ class TrackingState:
     p_B_A: np.ndarray | None = None
     hold_error: float = math.inf
     camera_offset: float = math.inf
+    v_M: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     def age(self) -> float:
         """Seconds since the bundle was last measured."""
@@ -208,8 +210,11 @@ class Track(Skill["Track.Params"]):
 
         See :class:`~.relative_pose.RelativePoseFilter`.
         """
-        vision_fixes: bool = False
-        """Send each accepted camera frame to the UAV's estimator as an external vision fix (opt-in: measured worse)."""
+        vision_fixes: bool = True
+        """Send each accepted camera frame to the UAV's estimator as an external vision fix.
+
+        Its height and velocity are then anchored to the camera, not to sonar echoes off the arm.
+        """
         f_B: float = Field(4.0, gt=0.0)
         """Planning-and-optimisation rate f_B (Hz), §IV-A; merge and selection run at f_O = 2·f_B."""
 
@@ -280,7 +285,7 @@ class Track(Skill["Track.Params"]):
             T_M_Q_ahead[:3, 3] += p.lead * relative.v_M
             command = self.engine.update(now, q, T_M_Q_ahead, self.carrier.speed(), relative.uav_speed, obstacles)
             self.carrier.set_joint_targets(command.q)
-            state = self._state(now, q, seen, relative.seen_at)
+            state = self._state(now, q, seen, relative.seen_at, relative.v_M)
             self._log(q, state)
         self._hold_uav(relative)
         self.write(f"{p.carrier}/{TRACKING}", state)
@@ -334,7 +339,7 @@ class Track(Skill["Track.Params"]):
             sonar_cone_zones(zones, self.T_M_Q @ self.sonar_T_Q, half_angle, length)
         return zones
 
-    def _state(self, now: float, q: np.ndarray, seen: bool, seen_at: float) -> TrackingState:
+    def _state(self, now: float, q: np.ndarray, seen: bool, seen_at: float, v_M: np.ndarray) -> TrackingState:
         """The tracking state from the last UAV pose (set) and the arm's forward kinematics."""
         T_M_Q = self.T_M_Q
         assert T_M_Q is not None, "called once a frame anchored the UAV pose"
@@ -344,7 +349,7 @@ class Track(Skill["Track.Params"]):
         p_aim_C = (invert(T_M_C) @ T_M_Q @ np.append(PbvsTarget().aim_Q, 1.0))[:3]
         hold_error = float(np.linalg.norm(T_M_Q[:3, 3] - self.p_hold_M))
         offset = float(math.hypot(p_aim_C[0], p_aim_C[1]))
-        return TrackingState(now, self.started, seen, seen_at, T_M_Q, p_B_A, hold_error, offset)
+        return TrackingState(now, self.started, seen, seen_at, T_M_Q, p_B_A, hold_error, offset, v_M)
 
     def _hold_uav(self, relative: RelativeState) -> None:
         """Relative hold of the UAV at its pose in M on the estimate (the estimates alone before any frame)."""
