@@ -13,7 +13,11 @@ encoders and the arm's URDF model):
   configurations {p, θ} at which C_m fits inside the aperture contour C_a.
 """
 
+from .detection import ApertureCandidate, DepthFrame, DetectionParams, detect_apertures, eye_in_hand_frame
 from .profile import LaunchConfiguration, ProfileParams, profile_analysis
 from .silhouette import mav_contour, mav_silhouette
 
-__all__ = ["LaunchConfiguration", "ProfileParams", "mav_contour", "mav_silhouette", "profile_analysis"]
+__all__ = [
+    "ApertureCandidate", "DepthFrame", "DetectionParams", "LaunchConfiguration", "ProfileParams",
+    "detect_apertures", "eye_in_hand_frame", "mav_contour", "mav_silhouette", "profile_analysis",
+]

@@ -286,9 +286,9 @@ def fronto_parallel_view(points: np.ndarray, normal: np.ndarray, delta: float, f
     u = np.rint(uv[:, 0] + K[0, 2]).astype(np.intp)
     v = np.rint(uv[:, 1] + K[1, 2]).astype(np.intp)
     inside = (u >= 0) & (u < w) & (v >= 0) & (v < h)
-    depth = np.full(h * w, np.inf)
-    np.minimum.at(depth, v[inside] * w + u[inside], fp[inside, 2])  # z-buffer: the nearest point per pixel
-    depth = depth.reshape(h, w)
+    flat = np.full(h * w, np.inf)
+    np.minimum.at(flat, v[inside] * w + u[inside], fp[inside, 2])  # z-buffer: the nearest point per pixel
+    depth = flat.reshape(h, w)
     binary = np.where(np.abs(depth - d) <= params.plane_tolerance_m, 255, 0).astype(np.uint8)
     depth[~np.isfinite(depth)] = np.nan
     return FrontoParallelView(depth.astype(np.float32), binary, K, R_fp, d)

@@ -271,13 +271,13 @@ def profile_analysis(
     valid: list[LaunchConfiguration] = []
     failed: list[int] = []
     for start in range(0, len(pairs), params.chunk):  # steps i and ii, in rank order
-        k = start + np.flatnonzero(_inside_segments(pairs[start : start + params.chunk], interior))  # in G
-        fits = (interior.depth(_place(boundary, mids[k], thetas[k])) > need).all(axis=1)
-        for n in k[fits][: params.n_valid - len(valid)]:
-            valid.append(_configuration(pairs[n], scores[n], mids[n], thetas[n], 0.0))
+        in_g = start + np.flatnonzero(_inside_segments(pairs[start : start + params.chunk], interior))
+        fits = (interior.depth(_place(boundary, mids[in_g], thetas[in_g])) > need).all(axis=1)
+        for n in in_g[fits][: params.n_valid - len(valid)]:
+            valid.append(_configuration(pairs[n], float(scores[n]), mids[n], float(thetas[n]), 0.0))
         if len(valid) >= params.n_valid:
             return valid
-        failed.extend(k[~fits])
+        failed.extend(int(n) for n in in_g[~fits])
     for k in failed:  # step iii: the sliding search along each initially-failed pair
         length = float(np.linalg.norm(pairs[k, 1] - pairs[k, 0]))
         shifts = _interleaved_shifts(length, mav_major)
@@ -288,7 +288,8 @@ def profile_analysis(
         fits = (interior.depth(_place(boundary, centres, np.full(len(shifts), thetas[k]))) > need).all(axis=1)
         first = np.flatnonzero(fits)
         if len(first):
-            valid.append(_configuration(pairs[k], scores[k], centres[first[0]], thetas[k], shifts[first[0]]))
+            valid.append(_configuration(pairs[k], float(scores[k]), centres[first[0]], float(thetas[k]),
+                                        float(shifts[first[0]])))
             if len(valid) >= params.n_valid:
                 break
     return valid

@@ -60,9 +60,9 @@ def _shape_points(geometry: ET.Element) -> np.ndarray:
         return corners * half
     a = np.linspace(0.0, 2.0 * math.pi, CIRCLE_SEGMENTS, endpoint=False)
     if cylinder is not None:
-        r, half = float(cylinder.attrib["radius"]), float(cylinder.attrib["length"]) / 2.0
+        r, h = float(cylinder.attrib["radius"]), float(cylinder.attrib["length"]) / 2.0
         ring = np.stack((r * np.cos(a), r * np.sin(a)), axis=1)
-        return np.concatenate([np.c_[ring, np.full(len(a), z)] for z in (-half, half)])
+        return np.concatenate([np.c_[ring, np.full(len(a), z)] for z in (-h, h)])
     if sphere is not None:  # its outline from any side: the great circles about each axis
         r = float(sphere.attrib["radius"])
         ring = np.stack((r * np.cos(a), r * np.sin(a), np.zeros_like(a)), axis=1)
