@@ -76,7 +76,7 @@ def aperture_region(candidate: ApertureCandidate, resolution: float, d_a: float)
     step_px = max(1, int(0.5 * resolution * view.K[0, 0] / view.plane_depth))
     v, u = np.nonzero(candidate.mask()[::step_px, ::step_px])
     on_plane_I = view.pixel_to_I(np.stack((u, v), axis=1).astype(float) * step_px)
-    behind = np.arange(0.0, d_a + 1e-9, 0.5 * resolution)  # along -n̂: away from the sensor, into the opening
+    behind = np.linspace(0.0, d_a, math.ceil(d_a / (0.5 * resolution)) + 1)  # along -n̂: into the opening
     region_I = on_plane_I[:, None, :] - behind[None, :, None] * candidate.normal_I
     return candidate.frame.to_nav(region_I.reshape(-1, 3))
 
