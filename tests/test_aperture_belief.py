@@ -3,17 +3,25 @@
 Synthetic depth frames of a level camera 1.2 m in front of a 0.1 m wall (face
 at y = 0) with two 0.2 m square openings A (left) and B (right), a back wall
 at y = 2 m behind them: depth by exact ray casting, nothing else in view.
+Then one short ``aperture_scan`` run of the MMS in ``collapsed_mockup``.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
+from shapely.geometry import Point
+from skill_harness import Harness
 
 from marsupial.skills.aperture.belief import ApertureBelief, BeliefParams, aperture_region
 from marsupial.skills.aperture.detection import DepthFrame, DetectionParams, detect_apertures
 from marsupial.skills.aperture.ranking import associate, rank_apertures
+from marsupial.skills.aperture.scan import ApertureScan
 from marsupial.skills.aperture.volumetric import FREE, OCCUPIED, UNKNOWN, VolumetricMap, sensor_cloud, voxel_centres
+from marsupial.world import World
+from marsupial.world.apertures import aperture_outline
 
 RESOLUTION = 0.03
 WALL_Y, WALL_T, BACK_Y = 0.0, 0.1, 2.0
@@ -115,3 +123,22 @@ def test_a_detections_region_fills_its_opening_from_the_face_to_d_a_behind_it():
         # most of the opening (the detected contour lies two or three pixels inside it: 0.74 measured)
         span = (region[:, 0].max() - region[:, 0].min()) * (region[:, 2].max() - region[:, 2].min())
         assert span > 0.65 * (x1 - x0) * (z1 - z0)
+
+
+def test_aperture_scan_in_collapsed_mockup_ranks_the_opening_it_faces_first():
+    """One sweep of five pan poses 1.3 m from the wall, facing the amoeba opening; the collapsed and U openings
+    drift in and out of view and the orthogonal one is at the edge: all are real, the faced one is the most
+    consistently seen."""
+    with World(scene="collapsed_mockup", seed=5) as world:
+        world.add_robot("mms", "mms", pose=[0.3, -0.05 - 1.3 - 1.057, math.pi / 2])
+        harness = Harness(world)
+        node = harness.node(ApertureScan, robot="mms")
+        assert harness.run(node, 30.0).name == "SUCCESS", node.feedback_message
+        ranked = harness.blackboard("mms/apertures")
+    outlines = {s: aperture_outline(s) for s in ("orthogonal", "collapsed", "amoeba", "u")}
+    best = ranked[0]
+    assert outlines["amoeba"].contains(Point(best.m_A[0], best.m_A[2]))
+    assert -0.05 <= best.m_A[1] <= 0.05  # inside the wall's thickness: the see-through region
+    assert best.score > ranked[1].score
+    for r in ranked:  # each candidate's m_A lies in a real opening (the U's centroid does not: it is on the tongue)
+        assert any(o.buffer(0.02).contains(Point(r.m_A[0], r.m_A[2])) for o in outlines.values()), r.summary()
