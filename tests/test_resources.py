@@ -128,6 +128,7 @@ CASES = {
     "land": (LANDING, "uav", {}),
     "relocalize": (LANDING, "uav", {}),
     "drive_pattern": (LANDING, "ugv", {}),
+    "aperture_scan": ("mms", "mms", {}),
 }
 
 
@@ -139,6 +140,10 @@ def world_for(setup):
         uav = world.add_robot("bebop2", "uav", pose=[3.0, 0.0, 0.0])
         world.bullet.resetBasePositionAndOrientation(uav.body_id, [0.0, 0.0, 1.2], [0, 0, 0, 1])
         carrier.docking.attach_now(uav)
+        return world
+    if setup == "mms":
+        world = World(scene="collapsed_mockup", seed=3)
+        world.add_robot("mms", "mms", pose=[0.3, -2.4, 1.5708])
         return world
     if setup["scene"] is None:
         world = World(seed=3)

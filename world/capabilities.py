@@ -121,6 +121,18 @@ class HasArm(Protocol):
 
 
 @runtime_checkable
+class HasArmModel(HasArm, Protocol):
+    """An arm whose model the robot's computer has: kinematics and the estimated pose of its base frame M."""
+
+    @property
+    def arm_kinematics(self) -> Any:
+        """Kinematic model of the arm (frame M → its links), from the URDF."""
+
+    def arm_base_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """Estimated pose of frame M in the navigation frame: position (m), quaternion."""
+
+
+@runtime_checkable
 class Carrier(HasArm, HasBase, Protocol):
     """A carrier with a docking device on its arm (resources ``base``, ``arm``, ``docking``): the mobile manipulator."""
 
@@ -166,7 +178,7 @@ class HasLift(Protocol):
 
 #: every capability, by name (``marsupial skills`` and error messages name them so)
 CAPABILITIES: tuple[type, ...] = (
-    HasBattery, HasBase, HasLidar, HasPlatform, Rotorcraft, HasArm, Carrier, HasGripper, HasLift,
+    HasBattery, HasBase, HasLidar, HasPlatform, Rotorcraft, HasArm, HasArmModel, Carrier, HasGripper, HasLift,
 )
 
 

@@ -456,7 +456,35 @@ class DockingPort:
         return float(self.__device.capture_distance)
 
 
-class CarrierOnboard(WheeledOnboard):
+class ArmModelOnboard(WheeledOnboard):
+    """A wheeled base carrying an arm whose model the robot's computer has: kinematics and mount of frame M.
+
+    :attr:`arm_base_link` names frame M, the link the arm's poses are expressed in.
+    """
+
+    arm_base_link: ClassVar[str] = "arm_base"
+    __slots__ = ()
+
+    @property
+    def arm_kinematics(self) -> Any:
+        """pinocchio model of the arm (frame M → the tip link; every link after M), from the URDF."""
+        return self._robot.arm_kinematics  # type: ignore[attr-defined]
+
+    def arm_mount(self) -> tuple[np.ndarray, np.ndarray]:
+        """Frame M in the ``base_footprint`` frame the estimate is of: position (m), rotation (URDF)."""
+        p_fp, R_fp = self.link_offset("base_footprint")
+        p_M, R_M = self.link_offset(self.arm_base_link)
+        return R_fp.T @ (p_M - p_fp), R_fp.T @ R_M
+
+    def arm_base_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """Estimated pose of frame M: the footprint estimate composed with M's URDF mount (position m, quaternion)."""
+        estimate = self.estimate()
+        p_M_fp, R_fp_M = self.arm_mount()
+        R = estimate.rotation
+        return estimate.position + R @ p_M_fp, quaternion_from_matrix(R @ R_fp_M)
+
+
+class CarrierOnboard(ArmModelOnboard):
     """The mobile manipulator's computer: base, arm (encoders, kinematics), docking device, cameras, LiDAR."""
 
     commands: ClassVar[Mapping[str, str]] = {
@@ -501,31 +529,15 @@ class CarrierOnboard(WheeledOnboard):
         """Lower and upper joint limits (rad)."""
         return self._robot.joint_limits  # type: ignore[attr-defined]
 
-    @property
-    def arm_kinematics(self) -> Any:
-        """pinocchio model of the arm (``arm_base`` = frame M → ``part_a``), from the URDF."""
-        return self._robot.arm_kinematics  # type: ignore[attr-defined]
-
     def arm_pose(self, name: str) -> np.ndarray:
         """Joint angles (rad) of a named arm pose."""
         return self._robot.arm_pose(name)  # type: ignore[attr-defined]
 
-    def arm_mount(self) -> tuple[np.ndarray, np.ndarray]:
-        """Frame M (``arm_base``) in the ``base_footprint`` frame the estimate is of: position (m), rotation (URDF)."""
-        p_fp, R_fp = self.link_offset("base_footprint")
-        p_M, R_M = self.link_offset("arm_base")
-        return R_fp.T @ (p_M - p_fp), R_fp.T @ R_M
 
-    def arm_base_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """Estimated pose of frame M: the footprint estimate composed with M's URDF mount (position m, quaternion)."""
-        estimate = self.estimate()
-        p_M_fp, R_fp_M = self.arm_mount()
-        R = estimate.rotation
-        return estimate.position + R @ p_M_fp, quaternion_from_matrix(R @ R_fp_M)
-
-
-class ManipulatorOnboard(WheeledOnboard):
+class ManipulatorOnboard(ArmModelOnboard):
     """A wheeled base with an arm and a gripper (the ``mms``): joint targets and encoders, gripper commands."""
+
+    arm_base_link: ClassVar[str] = "arm_base_link"
 
     commands: ClassVar[Mapping[str, str]] = {
         **WheeledOnboard.commands,

@@ -53,6 +53,7 @@ from marsupial.geometry import Vector
 from ..assets import asset_path
 from ..errors import UnknownNameError
 from ..estimation.ground import SKID_STEER_ODOMETRY
+from ..kinematics import ArmKinematics
 from ..onboard import ManipulatorOnboard, simulates_hardware
 from ..sensors.base import SensorConfig
 from ..sensors.camera import OPTICAL_FORWARD, Camera, Intrinsics
@@ -277,6 +278,7 @@ class MMS(WheeledRobot):
 
     Attributes:
         arm: the :class:`ArmController` of the six arm joints.
+        arm_kinematics: pinocchio model of the chain ``arm_base_link`` → ``tcp`` (same URDF; ``camera_link`` too).
         holsters: ``{"holster_left": Holster, "holster_right": Holster}``.
         held: the apparatus welded to the gripper, or ``None``.
     """
@@ -312,6 +314,7 @@ class MMS(WheeledRobot):
             max_torque=[info[10] for info in infos],
         )
         self.arm.reset(arm_q)
+        self.arm_kinematics = ArmKinematics.from_urdf(self.urdf, "arm_base_link", "tcp")  # same URDF as the body
         self.encoders = JointEncoders(world, f"{name}/arm")
         self.fingers = [self.link_index(link) for link in FINGER_LINKS]
         self.finger_travel = float(pybullet.getJointInfo(body, self.fingers[0], physicsClientId=cid)[9])
