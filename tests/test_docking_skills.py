@@ -121,7 +121,7 @@ def test_an_occlusion_during_contact_cancels_and_asks_for_authorization_again(tm
             if state is not None and state.p_B_A is not None:
                 gaps.append((world.now, state.p_B_A[2], getattr(contact, "phase", None)))
             if not occluded and getattr(contact, "phase", None) == "approach" and contact.t_c > 0.8:
-                DisturbanceSchedule.of(world).occlude(uav, "tag_bundle", When(start=world.now, duration=2.0))
+                DisturbanceSchedule.of(world).occlude(uav, "tag_bundle", When(start=world.now, duration=3.0))
                 occluded.append(world.now)
 
         assert harness.run(root, 12.0, on_tick) == Status.RUNNING

@@ -5,6 +5,7 @@ import math
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 from marsupial.world import World
 from marsupial.world.estimation.external import VisionFix, VisionFixFusion, VisionFixGains, vision_fix_topic
@@ -98,3 +99,18 @@ def test_flow_outliers_are_gated_only_while_fixes_are_recent():
     dpx, _, _, dvx, _, _, _, dbx, _, _ = far.poll()
     assert math.isclose(dpx, far.gains.position * far.gains.max_dt * far.gains.innovation_limit, rel_tol=1e-6)
     assert dvx == dbx == 0.0 and not far.flow_rejected(1.0, 0.5, 0.0)
+
+
+def test_relative_pose_propagates_without_the_jumps_of_the_uavs_frame_corrections():
+    from marsupial.geometry import quaternion_from_yaw
+    from marsupial.skills.uav_docking.relative_pose import unshifted
+    from marsupial.world.estimation import StateEstimate
+
+    shift0 = (0.1, 0.0, -0.05, 0.02)
+    moved = StateEstimate(
+        3.0, "odom", np.array([1.0, 2.0, 1.2]), quaternion_from_yaw(0.5), frame_shift=(0.1, 0.03, 0.15, 0.12)
+    )
+    back = unshifted(moved, shift0)
+    assert list(back.position) == pytest.approx([1.0, 1.97, 1.0])  # the 20 cm height correction taken out
+    assert back.yaw == pytest.approx(0.4) and back.frame_shift == shift0
+    assert unshifted(back, shift0) is back

@@ -52,11 +52,12 @@ radians, seconds (simulated).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
-from marsupial.geometry import rot_z, rotation_matrix, transform
+from marsupial.geometry import quaternion_from_matrix, rot_z, rotation_matrix, transform
 from marsupial.sensing import EstimateHistory
 from marsupial.world.onboard import VisionFix, vision_fix_topic
 
@@ -64,6 +65,27 @@ from .selection import yaw_of_rotation
 
 ESTIMATE_WINDOW = 1.0  # s of estimates kept to propagate to a late frame's stamp
 MAX_FRAME_AGE_S = 0.5  # s: older frames are not fused (the estimates would be extrapolated to their stamp)
+
+
+def unshifted(estimate: Any, shift0: tuple[float, float, float, float]) -> Any:
+    """``estimate`` (a ``StateEstimate`` off the team link) without the frame corrections made since ``shift0``.
+
+    ``shift0``: its ``frame_shift`` when the skill began.
+
+    The UAV's vision fixes move its odometry frame O under it (position and
+    heading, :attr:`~marsupial.world.estimation.StateEstimate.frame_shift`);
+    between two camera frames the drift ``C`` must see O's motion without
+    those jumps, or a fix's correction of the UAV's own estimate moves P_Q^M
+    by as much (a 20 cm height correction at the start of tracking sent the
+    hold 20 cm down onto the end effector).
+    """
+    shift = estimate.frame_shift
+    if shift == shift0:
+        return estimate
+    d = [a - b for a, b in zip(shift, shift0, strict=True)]
+    position = np.asarray(estimate.position) - np.array(d[:3])
+    orientation = quaternion_from_matrix(rot_z(-d[3]) @ rotation_matrix(estimate.orientation))  # back about z
+    return replace(estimate, position=position, orientation=orientation, frame_shift=shift0)
 
 
 def pose_at(history: EstimateHistory, t: float) -> np.ndarray | None:
@@ -237,6 +259,7 @@ class RelativePose:
         self.fused_stamp = -math.inf
         self.seen_at = -math.inf
         self.since = since
+        self.uav_shift0: tuple[float, float, float, float] | None = None  # the UAV's frame_shift at its first message
 
     def T_N_M(self, t: float, odometry: bool) -> np.ndarray | None:
         """Frame M in the carrier's frame at ``t``: of its wheel odometry (``odometry``) or of its estimate."""
@@ -255,7 +278,9 @@ class RelativePose:
         self.odometry_history.add(self.carrier.odometry())
         message = self.link.latest(self.uav)
         if message is not None and message.payload.stamp >= self.since:
-            self.uav_history.add(message.payload)
+            if self.uav_shift0 is None:
+                self.uav_shift0 = message.payload.frame_shift
+            self.uav_history.add(unshifted(message.payload, self.uav_shift0))
         observation = None if self.observer is None else self.observer.observe(now)
         pose = None if observation is None else observation.pose  # None: the bundle was not measured in it
         # not a frame from before this skill

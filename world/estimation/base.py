@@ -31,6 +31,9 @@ class StateEstimate:
         velocity: linear velocity (m/s) in ``frame``.
         angular_velocity: body rates (rad/s, body frame).
         source: what produced it (e.g. ``"imu+flow+sonar+baro"``, ``"wheel_odometry"``, ``"map_localization"``).
+        frame_shift: corrections by which external fixes have moved ``frame`` under the body so far,
+            ``(x, y, z (m), yaw (rad))``, cumulated (PX4 publishes its estimator's resets likewise); a consumer
+            that propagates with the estimate subtracts their change to get a smooth trajectory.
     """
 
     stamp: float
@@ -40,6 +43,7 @@ class StateEstimate:
     velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
     angular_velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
     source: str = ""
+    frame_shift: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
 
     @property
     def yaw(self) -> float:
@@ -66,6 +70,7 @@ class StateEstimate:
             "velocity": [float(v) for v in self.velocity],
             "angular_velocity": [float(v) for v in self.angular_velocity],
             "source": self.source,
+            "frame_shift": [float(v) for v in self.frame_shift],
         }
 
 

@@ -183,7 +183,7 @@ class FlightEstimator(Estimator):
         if self._cache is None:
             self._cache = StateEstimate(
                 self._stamp, self.frame, np.array(self.p), np.array(self._q), np.array(self.v), np.array(self._w),
-                self.source,
+                self.source, (self.shift[0], self.shift[1], self.shift[2], self.shift[3]),
             )
         return self._cache
 
