@@ -85,7 +85,7 @@ class CriterionList:
 
 def load_criterion_list(robot: str = "child_ugv") -> CriterionList:
     """The criterion list shipped for ``robot`` (``data/<robot>_f_list.yaml`` of this package)."""
-    path = resources.files(__package__).joinpath("data", f"{robot}_f_list.yaml")
+    path = resources.files(__package__) / "data" / f"{robot}_f_list.yaml"
     if not path.is_file():
         raise FileNotFoundError(f"no criterion list recorded for robot model '{robot}' ({path})")
     return CriterionList.from_document(yaml.safe_load(path.read_text()))

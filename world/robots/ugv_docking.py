@@ -110,17 +110,16 @@ class ChildUGV(WheeledRobot):
         self.size: tuple[float, float] = (float(shape[3][0]), float(shape[3][1]))
         self.carrier: MotherUGV | None = None
         width, height = (int(n) for n in camera_resolution)
-        self.camera = self.add_sensor(
-            Camera(
-                self,
-                "camera",
-                Intrinsics(width, height, CAMERA_FOV_V_DEG, near=0.02, far=10.0),
-                CAMERA_CONFIG.with_overrides(camera),
-                link="camera_link",
-                R_link_optical=OPTICAL_FORWARD,
-                measures_depth=False,
-            )
+        self.camera = Camera(
+            self,
+            "camera",
+            Intrinsics(width, height, CAMERA_FOV_V_DEG, near=0.02, far=10.0),
+            CAMERA_CONFIG.with_overrides(camera),
+            link="camera_link",
+            R_link_optical=OPTICAL_FORWARD,
+            measures_depth=False,
         )
+        self.add_sensor(self.camera)
 
     def footprint_corners(self) -> np.ndarray:
         """The four corners of the footprint rectangle in the world frame, ``(4, 3)`` (m)."""
