@@ -113,7 +113,7 @@ def _largest_group(candidates: np.ndarray) -> tuple[int, float, float] | None:
     x, y, w, h = cv2.boundingRect(candidates)
     if w == 0:
         return None
-    count, _, stats, centroids = cv2.connectedComponentsWithStats(candidates[y : y + h, x : x + w], connectivity=8)
+    _, _, stats, centroids = cv2.connectedComponentsWithStats(candidates[y : y + h, x : x + w], connectivity=8)
     k = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
     return int(stats[k, cv2.CC_STAT_AREA]), float(centroids[k, 0]) + x, float(centroids[k, 1]) + y
 
@@ -134,7 +134,7 @@ def border_points(
     x, y, w, h = cv2.boundingRect(border)
     if w == 0:
         return np.empty(0), np.empty(0)
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(border[y : y + h, x : x + w], connectivity=8)
+    _, labels, stats, _ = cv2.connectedComponentsWithStats(border[y : y + h, x : x + w], connectivity=8)
     left, top = stats[1:, cv2.CC_STAT_LEFT] + x, stats[1:, cv2.CC_STAT_TOP] + y + d
     right, bottom = left + stats[1:, cv2.CC_STAT_WIDTH] - 1, top + stats[1:, cv2.CC_STAT_HEIGHT] - 1
     half = params.offset_px / 2
