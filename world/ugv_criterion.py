@@ -8,8 +8,9 @@ camera frame (default sensing: pixel noise, exposure and white-balance
 errors) goes through the onboard feature extraction
 (:func:`marsupial.skills.ugv_docking.features.extract_features`) and
 ``(k_h, s_u)`` is recorded. Placements where the benchmark is not captured are
-left out. Regenerate the shipped list after changing the robot, the benchmark
-or the extraction::
+left out. s_u^e of eq. (7) is recorded beside it: s_u with the child aligned
+on the entry direction at :data:`ENTRANCE_DISTANCE_M`. Regenerate the shipped
+list after changing the robot, the benchmark or the extraction::
 
     python -m marsupial.world.ugv_criterion [--out PATH]
 """
@@ -29,6 +30,10 @@ from .robots.ugv_docking import ChildUGV, MotherUGV, place_child
 from .world import World
 
 CRITERION_DISTANCE_M = 0.40  # chosen (the paper gives none): two child lengths, the whole benchmark in view
+# s_u^e's distance: H_GS leaves the top of the image at y_e ≈ 0.226 m (the paper's d_e = 0.22 m, see
+# marsupial.world.robots.ugv_docking; s_u ≈ 196 px at 0.23 m); 0.25 m keeps I_h's 8-px checks 26 px inside
+# the frame, so a child wobbling by a pixel row or two still captures the benchmark where eq. (7) is met
+ENTRANCE_DISTANCE_M = 0.25
 BEARINGS_DEG = (-40.0, -30.0, -20.0, -10.0, 0.0, 10.0, 20.0, 30.0, 40.0)  # off the entry direction
 HEADING_OFFSETS_DEG = (-8.0, 0.0, 8.0)  # heading off pointing at E (the benchmark off the image centre)
 DEFAULT_OUT = Path(ugv_docking.__file__).resolve().parent / "data" / "child_ugv_f_list.yaml"
@@ -61,7 +66,17 @@ def record_criterion_list(
                 if features is not None:
                     entries.append((features.k_h, features.s_u))
                     placements.append((bearing, offset))
-    return CriterionList(child.kind, distance, tuple(entries), tuple(placements))
+        s_u_e = entrance_criterion(mother, child, ENTRANCE_DISTANCE_M)
+    return CriterionList(child.kind, distance, tuple(entries), tuple(placements), s_u_e, ENTRANCE_DISTANCE_M)
+
+
+def entrance_criterion(mother: MotherUGV, child: ChildUGV, distance: float) -> int:
+    """s_u^e of eq. (7) for this child: s_u (px) with it aligned on the entry direction, ``distance`` (m) from E."""
+    place_child(mother, child, math.pi / 2, 0.0, distance)
+    features = extract_features(child.camera.measure().rgb)
+    if features is None:
+        raise RuntimeError(f"the benchmark is not captured at {distance} m on the entry direction")
+    return features.s_u
 
 
 def main(argv: Sequence[str] | None = None) -> None:
@@ -74,7 +89,8 @@ def main(argv: Sequence[str] | None = None) -> None:
     f_list = record_criterion_list(args.distance, seed=args.seed)
     header = (
         f"# Criterion list f_list (Zhao et al., Remark 2) of the {f_list.robot}: (k_h, s_u) with the child at\n"
-        f"# {f_list.distance} m from the benchmark, recorded by `python -m marsupial.world.ugv_criterion`.\n"
+        f"# {f_list.distance} m from the benchmark, and s_u^e of eq. (7): s_u aligned on the entry direction at\n"
+        f"# {f_list.entrance_distance} m; recorded by `python -m marsupial.world.ugv_criterion`.\n"
     )
     args.out.write_text(header + f_list.to_yaml())
     print(f"wrote {len(f_list.entries)} entries to {args.out}")

@@ -43,12 +43,20 @@ class CriterionList:
         placements: ``(bearing, heading_offset)`` (rad) of each entry: the
             bearing of the camera from E off the entry direction, and the
             heading's offset from pointing at E (left positive).
+        s_u_e: s_u^e of eq. (7) measured for this robot model (px): s_u with the
+            child aligned on the entry direction at :attr:`entrance_distance`;
+            ``None`` when not recorded. Recorded because the paper's 203 px
+            (Table 1) is never reached with the ``child_ugv``'s camera (see
+            :class:`MatchTolerances`).
+        entrance_distance: the distance d_e (m, camera ground point to E) at which :attr:`s_u_e` was measured.
     """
 
     robot: str
     distance: float
     entries: tuple[tuple[float, int], ...]
     placements: tuple[tuple[float, float], ...]
+    s_u_e: int | None = None
+    entrance_distance: float | None = None
 
     def __post_init__(self) -> None:
         if not self.entries or len(self.entries) != len(self.placements):
@@ -67,6 +75,8 @@ class CriterionList:
                 for (k, s), (b, o) in zip(self.entries, self.placements, strict=True)
             ],
         }
+        if self.s_u_e is not None:
+            document.update(s_u_e=int(self.s_u_e), entrance_distance_m=self.entrance_distance)
         return yaml.safe_dump(document, sort_keys=False, width=120)
 
     @classmethod
@@ -80,6 +90,8 @@ class CriterionList:
             placements=tuple(
                 (float(np.radians(e["bearing_deg"])), float(np.radians(e["heading_offset_deg"]))) for e in entries
             ),
+            s_u_e=int(document["s_u_e"]) if "s_u_e" in document else None,
+            entrance_distance=float(document["entrance_distance_m"]) if "entrance_distance_m" in document else None,
         )
 
 
@@ -110,6 +122,11 @@ class MatchTolerances:
         delta_u: Δu, tolerance of u_h about the image centre W/2 (px).
         delta_k: Δk, tolerance of k_h about 0.
         s_u_e: s_u^e, the pre-measured s_u at the visual perception criterion distance d_e (px).
+            The default is the paper's 203 px (Table 1). The ``child_ugv`` of this
+            world never sees s_u that large (H_GS leaves its image at ≈196 px,
+            y_e ≈ 0.23 m), so the docking skills and conditions use the value
+            measured for the robot model instead (:attr:`CriterionList.s_u_e`,
+            recorded with f_list); :func:`robot_tolerances` builds those.
     """
 
     delta_u: float = 5.0
@@ -130,3 +147,14 @@ def matched(features: BenchmarkFeatures | None, tolerances: MatchTolerances = Ma
         and abs(features.u_h - half_width) < tolerances.delta_u
         and features.s_u >= tolerances.s_u_e
     )
+
+
+def robot_tolerances(
+    f_list: CriterionList, delta_u: float = 5.0, delta_k: float = 0.02, s_u_e: int | None = None
+) -> MatchTolerances:
+    """Eq. (7)'s margins for the robot model of ``f_list``: Δu, Δk as given, s_u^e given or else the recorded one.
+
+    Falls back to the paper's 203 px when neither is given nor recorded.
+    """
+    measured = s_u_e if s_u_e is not None else f_list.s_u_e
+    return MatchTolerances(delta_u, delta_k, measured if measured is not None else MatchTolerances.s_u_e)

@@ -253,6 +253,18 @@ class MotherUGV(WheeledRobot):
             and np.all(np.abs(corners[:, 2]) <= 0.02)
         )
 
+    @simulates_hardware
+    def platform_switch(self) -> bool:
+        """The load switch under the platform plate: pressed while a child UGV stands wholly on the plate.
+
+        Simulated as :meth:`child_on_platform` for every child of the world
+        (a real station senses this with a load cell or limit switches at the
+        plate's end; the switch reports only pressed or not, no identity).
+        """
+        return any(
+            isinstance(robot, ChildUGV) and self.child_on_platform(robot) for robot in self.world.robots.values()
+        )
+
     def raise_platform(self) -> list[str]:
         """Lift the platform to the storage capsule, carrying the children standing on it.
 
