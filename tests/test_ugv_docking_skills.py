@@ -29,6 +29,7 @@ def test_mother_turns_by_remark_1_and_the_child_steers_towards_the_entry_line():
     assert align_rate(0.6, gain=0.5, max_rate=0.15) == pytest.approx(-0.15)
     # k_h > 0: the entry line lies to the child's right, I_h is kept left of the centre (the child heads right)
     assert target_column(_features(k_h=0.2), lateral_gain=2.0, max_offset=0.5, delta_k=0.02) == pytest.approx(192.0)
+    assert target_column(_features(k_h=0.2), lateral_gain=5.0, max_offset=0.3, delta_k=0.02) == pytest.approx(224.0)
     assert target_column(_features(k_h=-0.9), lateral_gain=2.0, max_offset=0.5, delta_k=0.02) == pytest.approx(480.0)
     assert target_column(_features(k_h=0.01), lateral_gain=2.0, max_offset=0.5, delta_k=0.02) == 320.0
 
@@ -41,8 +42,11 @@ def test_matching_rotates_advances_waits_or_backs_off():
     assert (v, what) == (gains.speed, "advancing")
     v, _, what = match_command(_features(k_h=0.1, s_u=190), tolerances, gains)
     assert (v, what) == (0.0, "waiting for alignment")  # coordinated: the mother turns the entrance
-    v, _, what = match_command(_features(k_h=0.1, s_u=190), tolerances, MatchGains(lateral_gain=3.0))
-    assert v < 0 and what == "backing off"  # independent: back off to come in again
+    alone = MatchGains(lateral_gain=3.0)
+    v, _, what = match_command(_features(k_h=0.1, s_u=190), tolerances, alone)
+    assert v < 0 and what == "backing off"  # independent: back off to come in again ...
+    assert match_command(_features(k_h=0.1, s_u=160), tolerances, alone, retreating=True)[2] == "backing off"
+    assert match_command(_features(k_h=0.1, s_u=140), tolerances, alone, retreating=True)[2] != "backing off"
 
 
 def test_s_u_e_is_measured_for_the_child_ugv_and_the_paper_value_kept_as_the_default():

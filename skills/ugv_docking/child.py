@@ -8,8 +8,9 @@ wheel odometry; the transitions between them are the conditions C1–C4 of
 
 - ``child_link`` — rotate on the spot until the benchmark is captured (C1), then succeed;
 - ``child_approach`` — drive towards the benchmark keeping I_h on the image's
-  vertical bisector ("with the guide of image feature u_h"); runs until the
-  tree moves on (C2) or falls back to linking (C4);
+  vertical bisector ("with the guide of image feature u_h"; a child docking
+  alone may already steer towards the entry line by k_h, ``lateral_gain``);
+  runs until the tree moves on (C2) or falls back to linking (C4);
 - ``child_match`` — advance and rotate alternately (:func:`~.steering.match_command`)
   until eq. (7) holds (C3, the tree ends it);
 - ``child_direct`` — drive straight in, holding the heading on odometry,
@@ -33,7 +34,7 @@ from marsupial.world.capabilities import HasBase, HasLift
 
 from .conditions import LOST_FRAMES
 from .criterion import load_criterion_list, robot_tolerances
-from .steering import MatchGains, centring_rate, match_command
+from .steering import MatchGains, centring_rate, match_command, target_column
 from .vision import PLATFORM_TOPIC, VIEW_KEY, BenchmarkView, PlatformReport, child_view
 
 
@@ -79,7 +80,13 @@ class ChildApproach(_ChildSkill["ChildApproach.Params"]):
         max_rate: float = Field(0.5, gt=0.0)
         """Turn-rate limit (rad/s)."""
         turn_band: float = Field(60.0, gt=0.0)
-        """I_h farther than this off the centre (px) makes the child stop and rotate first."""
+        """I_h farther than this off its column (px) makes the child stop and rotate first."""
+        lateral_gain: float = Field(0.0, ge=0.0)
+        """Steer towards the entry line by k_h already while approaching (as ``child_match``'s; 0: I_h centred)."""
+        max_offset: float = Field(0.3, gt=0.0, lt=1.0)
+        """Largest offset of I_h from the centre while steering towards the entry line (fraction of W/2)."""
+        delta_k: float = Field(0.02, gt=0.0)  # Δk = 0.02, Table 1
+        """Within this |k_h| (Table 1's Δk) the child keeps I_h centred."""
         frames: int = Field(LOST_FRAMES, ge=1)
         """Keep steering on the newest features while fewer than this many successive frames missed them."""
 
@@ -90,9 +97,9 @@ class ChildApproach(_ChildSkill["ChildApproach.Params"]):
             self.robot.stop()
             self.feedback_message = "benchmark lost"
             return Status.RUNNING
-        centre = features.image_width / 2.0
-        omega = centring_rate(features, centre, p.turn_gain, p.max_rate)
-        v = p.speed if abs(features.u_h - centre) <= p.turn_band else 0.0
+        column = target_column(features, p.lateral_gain, p.max_offset, p.delta_k)
+        omega = centring_rate(features, column, p.turn_gain, p.max_rate)
+        v = p.speed if abs(features.u_h - column) <= p.turn_band else 0.0
         self.robot.drive(v, omega)
         self.feedback_message = f"u_h {features.u_h:.0f} px, s_u {features.s_u} px"
         return Status.RUNNING
@@ -119,15 +126,20 @@ class ChildMatch(_ChildSkill["ChildMatch.Params"]):
         lateral_gain: float = Field(0.0, ge=0.0)
         """Steer onto the entry line by k_h (half image widths of offset per unit k_h, Remark 1). 0: keep I_h
         centred and let the mother turn the entrance (coordinated docking); > 0: the child alone (independent)."""
-        max_offset: float = Field(0.5, gt=0.0, lt=1.0)
+        max_offset: float = Field(0.3, gt=0.0, lt=1.0)
         """Largest offset of I_h from the centre while steering onto the entry line (fraction of W/2)."""
+        retreat: float = Field(0.8, gt=0.0, lt=1.0)
+        """Steering onto the entry line: once close but not aligned, back off until s_u < retreat · s_u^e."""
         frames: int = Field(LOST_FRAMES, ge=1)
         """Keep steering on the newest features while fewer than this many successive frames missed them."""
 
     def start(self) -> None:
         p = self.params
         self.tolerances = robot_tolerances(load_criterion_list(self.robot.kind), delta_k=p.delta_k, s_u_e=p.s_u_e)
-        self.gains = MatchGains(p.speed, p.turn_gain, p.max_rate, p.turn_band, p.lateral_gain, p.max_offset)
+        self.gains = MatchGains(
+            p.speed, p.turn_gain, p.max_rate, p.turn_band, p.lateral_gain, p.max_offset, p.retreat
+        )
+        self.retreating = False
 
     def step(self) -> Status:
         features = self.view().held(self.params.frames)
@@ -135,7 +147,8 @@ class ChildMatch(_ChildSkill["ChildMatch.Params"]):
             self.robot.stop()
             self.feedback_message = "benchmark lost"
             return Status.RUNNING
-        v, omega, what = match_command(features, self.tolerances, self.gains)
+        v, omega, what = match_command(features, self.tolerances, self.gains, self.retreating)
+        self.retreating = what == "backing off"
         self.robot.drive(v, omega)
         self.feedback_message = f"{what}: u_h {features.u_h:.0f} px, k_h {features.k_h:+.3f}, s_u {features.s_u} px"
         return Status.RUNNING

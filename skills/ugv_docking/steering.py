@@ -68,6 +68,7 @@ class MatchGains:
         turn_band: I_h this far (px) off its column makes the child stop and rotate.
         lateral_gain: k_h to image offset gain of :func:`target_column` (half widths per unit k_h).
         max_offset: largest offset of the target column (fraction of W/2).
+        retreat: backing off goes on until s_u is below this fraction of s_u^e.
     """
 
     speed: float = 0.04
@@ -75,11 +76,12 @@ class MatchGains:
     max_rate: float = 0.3
     turn_band: float = 12.0
     lateral_gain: float = 0.0
-    max_offset: float = 0.5
+    max_offset: float = 0.3
+    retreat: float = 0.8
 
 
 def match_command(
-    features: BenchmarkFeatures, tolerances: MatchTolerances, gains: MatchGains
+    features: BenchmarkFeatures, tolerances: MatchTolerances, gains: MatchGains, retreating: bool = False
 ) -> tuple[float, float, str]:
     """``(v, omega, what)`` of one matching step: rotate, advance or back off (m/s, rad/s, a short description).
 
@@ -88,13 +90,16 @@ def match_command(
     while s_u < s_u^e. At s_u ≥ s_u^e with k_h still outside Δk, a child
     steering onto the entry line itself (``lateral_gain`` > 0: the independent
     docking) backs off along its line of sight to E (column W/2) to come in
-    again; with ``lateral_gain`` 0 (the coordinated docking, where the mother
-    turns the entrance towards the child) it waits there, centring I_h.
+    again, and goes on backing off (``retreating``, what = "backing off") until
+    s_u < ``retreat`` · s_u^e; with ``lateral_gain`` 0 (the coordinated
+    docking, where the mother turns the entrance towards the child) it waits
+    there, centring I_h.
     """
     column = target_column(features, gains.lateral_gain, gains.max_offset, tolerances.delta_k)
     close = features.s_u >= tolerances.s_u_e
     aligned = abs(features.k_h) < tolerances.delta_k
-    if close and not aligned and gains.lateral_gain > 0.0:
+    retreating = retreating and features.s_u >= gains.retreat * tolerances.s_u_e
+    if gains.lateral_gain > 0.0 and (retreating or (close and not aligned)):
         omega = centring_rate(features, features.image_width / 2.0, gains.turn_gain, gains.max_rate)
         return -0.5 * gains.speed, omega, "backing off"
     omega = centring_rate(features, column, gains.turn_gain, gains.max_rate)
