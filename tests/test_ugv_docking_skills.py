@@ -6,7 +6,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import py_trees
 import pytest
+from py_trees.common import Status
 from skill_harness import Harness
 
 import marsupial
@@ -14,6 +16,7 @@ from marsupial.geometry import rotation_matrix
 from marsupial.skills.ugv_docking.conditions import BenchmarkCaptured, EntranceMatched, FeaturesLost, WithinCriterion
 from marsupial.skills.ugv_docking.criterion import MatchTolerances, load_criterion_list, robot_tolerances
 from marsupial.skills.ugv_docking.features import BenchmarkFeatures
+from marsupial.skills.ugv_docking.station import Carry, Release
 from marsupial.skills.ugv_docking.steering import MatchGains, align_rate, match_command, target_column
 from marsupial.world import World
 from marsupial.world.robots.ugv_docking import place_child
@@ -147,3 +150,24 @@ def test_coordinated_docking_ends_with_the_child_lifted_inside_the_capsule(tmp_p
     assert -0.445 + 0.10 <= x <= -0.06 - 0.10  # the 0.2 m child wholly on the 0.385 m plate (x: -0.445 .. -0.06)
     assert abs(y) + 0.085 * math.cos(yaw) + 0.10 * abs(math.sin(yaw)) <= 0.095  # inside the 0.19 m entrance
     assert np.linalg.norm(p_mother[-1][:2] - p_mother[0][:2]) > 0.4  # carried away
+
+
+def test_carry_refuses_an_empty_platform_and_release_lowers_it_and_backs_the_child_out():
+    with World(scene="marsupial_yard", seed=2) as world:
+        mother = world.add_robot("mother_ugv", name="mother", pose=[0.0, 0.0, 0.0])
+        child = world.add_robot("child_ugv", name="child", pose=[-1.5, 0.0, 0.0])
+        h = Harness(world)
+        assert h.run(h.node(Carry, "mother", target=(0.5, 0.0)), 1.0) == Status.FAILURE  # nothing stored
+        mother.store(child)
+        z_stored = child.pose()[0][2]
+        tree = py_trees.composites.Sequence("carry and release", memory=True, children=[
+            h.node(Carry, "mother", target=(0.5, 0.0), tolerance=0.05),
+            h.node(Release, "mother", child="child", distance=0.5),
+        ])
+        assert h.run(tree, 30.0) == Status.SUCCESS
+        assert child.carrier is None and not mother.carried and mother.platform_height() < 0.005
+        assert z_stored - child.pose()[0][2] == pytest.approx(0.30, abs=0.01)  # back on the floor
+        p_entrance, heading = mother.entrance_pose()
+        out = np.array([math.cos(heading), math.sin(heading)]) @ (p_entrance - child.pose()[0])[:2]
+        assert out - child.size[0] / 2 > 0.1 and not mother.child_on_platform(child)  # its front 10 cm out
+        assert np.linalg.norm(mother.pose()[0][:2]) > 0.4  # it was carried first
