@@ -164,7 +164,7 @@ class HasGripper(Protocol):
 
 @runtime_checkable
 class HasLift(Protocol):
-    """A lifting platform (resource ``lift``): raise, lower, height."""
+    """A lifting platform (resource ``lift``): raise, lower, height, its load switch and travel."""
 
     def raise_platform(self) -> list[str]:
         """Raise the platform; returns the team members it lifts."""
@@ -174,6 +174,14 @@ class HasLift(Protocol):
 
     def platform_height(self) -> float:
         """Platform height (m) from the lift encoder."""
+
+    @property
+    def platform_occupied(self) -> bool:
+        """The platform's load switch: a child stands wholly on the plate."""
+
+    @property
+    def lift_travel(self) -> float:
+        """Platform height at the storage capsule (m)."""
 
 
 #: every capability, by name (``marsupial skills`` and error messages name them so)

@@ -468,6 +468,16 @@ class LiftOnboard(WheeledOnboard):
         """Platform height (m) from the lift encoder."""
         return float(self._robot.platform_height())  # type: ignore[attr-defined]
 
+    @property
+    def platform_occupied(self) -> bool:
+        """The platform's load switch: pressed while a child stands wholly on the plate."""
+        return bool(self._robot.platform_switch())  # type: ignore[attr-defined]
+
+    @property
+    def lift_travel(self) -> float:
+        """Platform height at the storage capsule (m), from the station's model."""
+        return float(self._robot.lift_travel)  # type: ignore[attr-defined]
+
     def _hold_lift(self) -> None:
         """The lift's safe stop: hold the platform where it is."""
         self._robot.hold_lift()  # type: ignore[attr-defined]

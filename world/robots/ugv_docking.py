@@ -38,6 +38,7 @@ down to the floor.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -109,17 +110,16 @@ class ChildUGV(WheeledRobot):
         self.size: tuple[float, float] = (float(shape[3][0]), float(shape[3][1]))
         self.carrier: MotherUGV | None = None
         width, height = (int(n) for n in camera_resolution)
-        self.camera = self.add_sensor(
-            Camera(
-                self,
-                "camera",
-                Intrinsics(width, height, CAMERA_FOV_V_DEG, near=0.02, far=10.0),
-                CAMERA_CONFIG.with_overrides(camera),
-                link="camera_link",
-                R_link_optical=OPTICAL_FORWARD,
-                measures_depth=False,
-            )
+        self.camera = Camera(
+            self,
+            "camera",
+            Intrinsics(width, height, CAMERA_FOV_V_DEG, near=0.02, far=10.0),
+            CAMERA_CONFIG.with_overrides(camera),
+            link="camera_link",
+            R_link_optical=OPTICAL_FORWARD,
+            measures_depth=False,
         )
+        self.add_sensor(self.camera)
 
     def footprint_corners(self) -> np.ndarray:
         """The four corners of the footprint rectangle in the world frame, ``(4, 3)`` (m)."""
@@ -253,6 +253,18 @@ class MotherUGV(WheeledRobot):
             and np.all(np.abs(corners[:, 2]) <= 0.02)
         )
 
+    @simulates_hardware
+    def platform_switch(self) -> bool:
+        """The load switch under the platform plate: pressed while a child UGV stands wholly on the plate.
+
+        Simulated as :meth:`child_on_platform` for every child of the world
+        (a real station senses this with a load cell or limit switches at the
+        plate's end; the switch reports only pressed or not, no identity).
+        """
+        return any(
+            isinstance(robot, ChildUGV) and self.child_on_platform(robot) for robot in self.world.robots.values()
+        )
+
     def raise_platform(self) -> list[str]:
         """Lift the platform to the storage capsule, carrying the children standing on it.
 
@@ -307,3 +319,36 @@ class MotherUGV(WheeledRobot):
         state = super().state()
         state.update(platform_height=self.platform_height(), carried=list(self.carried))
         return state
+
+
+# ------------------------------------------------------------ entry geometry (truth, for tests and calibration)
+def entry_geometry(mother: MotherUGV, child: ChildUGV) -> tuple[float, float, float]:
+    """The child's true pose relative to the benchmark in Zhao et al.'s terms (Fig. 2): ``(α, x_e, y_e)``.
+
+    {R} is the child's ground frame: origin under the camera's optical centre,
+    Y_R along the camera's horizontal viewing direction (the heading), X_R to
+    its right. ``(x_e, y_e)`` (m) is E, the ground projection of I_h, in {R};
+    α (rad) the angle from X_R to VE, the benchmark's normal into the station
+    (α = π/2: the child heads along the entry direction). World truth: for
+    tests, calibration and scoring, not for skills.
+    """
+    p_cam, R_cam = child.camera.optical_pose()
+    forward = R_cam[:2, 2] / np.linalg.norm(R_cam[:2, 2])
+    right = np.array([forward[1], -forward[0]])
+    p_bench, q_bench = mother.benchmark_pose()
+    normal = rotation_matrix(q_bench)[:2, 0]
+    offset = p_bench[:2] - p_cam[:2]
+    return float(math.atan2(normal @ forward, normal @ right)), float(offset @ right), float(offset @ forward)
+
+
+def place_child(mother: MotherUGV, child: ChildUGV, alpha: float, x_e: float, y_e: float) -> None:
+    """Teleport ``child`` (at rest) to the relative pose ``(α, x_e, y_e)`` of :func:`entry_geometry` (rad, m)."""
+    p_bench, q_bench = mother.benchmark_pose()
+    heading = yaw_of(q_bench) + math.pi / 2 - alpha  # VE is at α from X_R = heading - π/2
+    forward = np.array([math.cos(heading), math.sin(heading)])
+    right = np.array([forward[1], -forward[0]])
+    p_link, R_link = child.link_offset("camera_link")
+    p_optical = p_link + R_link @ child.camera.offset  # camera centre in the base frame (the mount is level)
+    origin = p_bench[:2] - x_e * right - y_e * forward  # O_R, under the camera
+    base = origin - (p_optical[0] * forward - p_optical[1] * right)
+    child.diff_drive.teleport(base, heading)

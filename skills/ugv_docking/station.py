@@ -1,0 +1,112 @@
+"""The mother's lifting docking station after the docking (Zhao et al., §2, Fig. 4(d)): lift, carry, release.
+
+- ``lift`` — raise the platform with the child on it to its storing capsule
+  ("this platform shall elevate the child robot to its expected storing
+  capsule"); succeed when the lift encoder reads the capsule's height;
+- ``carry`` — drive the mother with the child stored (``drive_to``'s law on
+  the mother's estimate), refusing to start unless the platform is up and its
+  load switch pressed;
+- ``release`` — lower the platform to the floor, then drive the child out
+  backwards a given distance on its odometry (the station's entrance is its only opening).
+
+Each reports the platform over the team link (:class:`~.vision.PlatformReport`).
+Heights and distances in m, speeds m/s.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from py_trees.common import Status
+from pydantic import Field
+
+from marsupial.trees.skill import NodeParams, Skill
+from marsupial.world.capabilities import HasBase, HasLift
+
+from ..generic import DriveTo
+from .mother import ChildMember
+from .vision import report_platform
+
+LIFT_TOLERANCE = 0.005  # m: the lift encoder this close to its target counts as arrived
+
+
+class Lift(Skill["Lift.Params"]):
+    """Raise the platform with the child on it to the storing capsule."""
+
+    class Params(NodeParams):
+        tolerance: float = Field(LIFT_TOLERANCE, gt=0.0)
+        """Lift-encoder error (m) at which the platform is at the capsule."""
+
+    robot_kinds = (HasLift,)
+    claims = ("lift",)
+
+    def start(self) -> None:
+        self.lifted = self.robot.raise_platform()
+
+    def step(self) -> Status:
+        report_platform(self)
+        if not self.lifted:
+            self.feedback_message = "nothing on the platform to lift"
+            return Status.FAILURE
+        height, travel = float(self.robot.platform_height()), float(self.robot.lift_travel)
+        self.feedback_message = f"lifting {', '.join(self.lifted)}: {height:.3f} of {travel:.2f} m"
+        return Status.SUCCESS if height >= travel - self.params.tolerance else Status.RUNNING
+
+
+class Carry(DriveTo):
+    """Drive the mother to a point with the child stored in its capsule (``drive_to`` on the mother's estimate)."""
+
+    robot_kinds = (HasBase, HasLift)
+
+    def start(self) -> None:
+        travel = float(self.robot.lift_travel)
+        self.stored = bool(self.robot.platform_occupied) and self.robot.platform_height() >= travel - LIFT_TOLERANCE
+
+    def step(self) -> Status:
+        if not self.stored:
+            self.feedback_message = "no child stored: the platform is not up with a child on it"
+            return Status.FAILURE
+        return super().step()
+
+
+class Release(Skill["Release.Params"]):
+    """Lower the platform to the floor, then drive the child out backwards."""
+
+    class Params(NodeParams):
+        child: ChildMember = "child"
+        """The child on the platform (it drives out)."""
+        distance: float = Field(0.6, gt=0.0)
+        """How far the child backs out (m, its odometry): clear of the entrance."""
+        speed: float = Field(0.1, gt=0.0, le=0.3)
+        """The child's reversing speed (m/s)."""
+        tolerance: float = Field(LIFT_TOLERANCE, gt=0.0)
+        """Lift-encoder height (m) under which the platform is down."""
+
+    robot_kinds = (HasLift,)
+    claims = ("lift", "{child}/base")
+
+    def start(self) -> None:
+        self.robot.lower_platform()
+        self.child = self.member(self.params.child)
+        self.p0: np.ndarray | None = None
+
+    def step(self) -> Status:
+        report_platform(self)
+        p = self.params
+        height = float(self.robot.platform_height())
+        if self.p0 is None:
+            if height > p.tolerance:
+                self.feedback_message = f"lowering: {height:.3f} m"
+                return Status.RUNNING
+            self.p0 = np.array(self.child.estimate().position[:2])
+        backed = float(np.linalg.norm(np.array(self.child.estimate().position[:2]) - self.p0))
+        if backed >= p.distance:
+            self.child.stop()
+            self.feedback_message = f"{p.child} out, {backed:.2f} m back"
+            return Status.SUCCESS
+        self.child.drive(-p.speed, 0.0)
+        self.feedback_message = f"{p.child} backing out: {backed:.2f} m"
+        return Status.RUNNING
+
+    def finish(self, status: Status) -> None:
+        self.child.stop()
+        self.leave_safe()
