@@ -23,6 +23,7 @@ from marsupial.trees.skill import Skill
 from marsupial.world import World
 from marsupial.world.capabilities import Carrier, HasBase, Rotorcraft, provides
 from marsupial.world.onboard import CarrierOnboard, QuadrotorOnboard
+from marsupial.world.robots.attachment import place_link_at
 
 TEAM = """\
 mission: m
@@ -103,6 +104,7 @@ def take_over(port, resource):
         "base": lambda: port.drive(0.2, 0.0),
         "arm": lambda: port.hold_arm(),
         "docking": lambda: port.docking.magnet_on(),
+        "lift": lambda: port.lower_platform(),
     }[resource]()
 
 
@@ -129,6 +131,16 @@ CASES = {
     "relocalize": (LANDING, "uav", {}),
     "drive_pattern": (LANDING, "ugv", {}),
     "aperture_scan": ("mms", "mms", {}),
+    "child_link": ("yard_away", "child", {}),
+    "child_approach": ("yard_facing", "child", {}),
+    "child_match": ("yard_facing", "child", {}),
+    "child_direct": ("yard_facing", "child", {}),
+    "mother_link": ("yard_away", "mother", {}),
+    "mother_align": ("yard_facing", "mother", {}),
+    "mother_direct": ("yard_facing", "mother", {}),
+    "lift": ("yard_boarded", "mother", {}),
+    "carry": ("yard_stored", "mother", {"target": (1.0, 0.0)}),
+    "release": ("yard_stored", "mother", {}),
 }
 
 
@@ -140,6 +152,15 @@ def world_for(setup):
         uav = world.add_robot("bebop2", "uav", pose=[3.0, 0.0, 0.0])
         world.bullet.resetBasePositionAndOrientation(uav.body_id, [0.0, 0.0, 1.2], [0, 0, 0, 1])
         carrier.docking.attach_now(uav)
+        return world
+    if str(setup).startswith("yard"):  # the child 0.6 m before the entrance (x = -0.45 m)
+        world = World(scene="marsupial_yard", seed=3)
+        mother = world.add_robot("mother_ugv", "mother", pose=[0.0, 0.0, 0.0])
+        child = world.add_robot("child_ugv", "child", pose=[-1.15, 0.0, 3.1416 if setup == "yard_away" else 0.0])
+        if setup == "yard_stored":
+            mother.store(child)
+        if setup == "yard_boarded":  # on the platform, down at the floor
+            place_link_at(child, "base_footprint", *mother.platform_pose())
         return world
     if setup == "mms":
         world = World(scene="collapsed_mockup", seed=3)
