@@ -391,7 +391,7 @@ def apply_disturbances(world: World, spec: dict[str, Any], where: str = "world")
     _check_keys(where, spec, DISTURBANCE_KEYS)
     # validate everything first: a bad entry leaves the world untouched
     wind = _wind(world, f"{where}.wind", spec["wind"]) if "wind" in spec else None
-    effects: list[tuple[Callable[..., None], tuple[Any, ...]]] = []
+    effects: list[tuple[Callable[..., object], tuple[Any, ...]]] = []
     for i, entry in _entries(where, "occlusion", spec):
         path = f"{where}.occlusion{i}"
         _check_keys(path, entry, ("robot", "link", *_WHEN_KEYS), required=("robot",))
