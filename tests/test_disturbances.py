@@ -339,3 +339,13 @@ def test_kidnap_spread_is_seeded_and_bounded():
     assert poses[0] == poses[1] != poses[2]  # the seed's draw, another seed's another
     for x, y, yaw in poses:
         assert abs(x - 1.0) <= 0.3 and abs(y - 2.0) <= 0.2 and abs(yaw) <= 0.5
+
+
+def test_a_child_carried_on_the_lift_cannot_be_kidnapped():
+    with World(scene="marsupial_yard", seed=0) as world:
+        mother = world.add_robot("mother_ugv", name="mother", pose=[0.0, 0.0, 0.0])
+        child = world.add_robot("child_ugv", name="child", pose=[-2.0, 0.0, 0.0])
+        mother.store(child)
+        apply_disturbances(world, {"kidnap": {"robot": "child", "at": 0.5, "pose": [1.0, 2.0, 0.0]}})
+        with pytest.raises(WorldError, match="kidnap child: it is carried by mother"):
+            world.step(1.0)

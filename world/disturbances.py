@@ -311,7 +311,7 @@ class DisturbanceSchedule:
             target[0] += dx
             target[1] += dy
             target[-1] += dyaw
-        self._kidnaps.append(Kidnap(label, robot, self._clock.steps_for(at), tuple(target)))
+        self._kidnaps.append(Kidnap(robot, self._clock.steps_for(at), tuple(target)))
         self._kidnaps.sort(key=lambda k: k.step)
         self.update()
         return tuple(target)

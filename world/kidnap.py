@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pybullet
 
+from .errors import WorldError
 from .robots.wheeled import WheeledRobot
 
 if TYPE_CHECKING:
@@ -29,7 +30,6 @@ class Kidnap:
     says. ``step`` is the physics step after which it is applied.
     """
 
-    label: str  # e.g. "kidnap child"
     robot: Robot
     step: int
     pose: tuple[float, ...]
@@ -41,8 +41,12 @@ def teleport(robot: Robot, pose: Sequence[float]) -> None:
     World side only: the body and its velocity change, the robot's onboard
     estimate is not told (a wheeled robot's odometry integrates its wheels,
     which did not turn). A wheeled base is placed through its drive, which
-    keeps it on the floor.
+    keeps it on the floor. A child carried by its mother (welded to the lift)
+    raises :class:`WorldError`.
     """
+    carrier = getattr(robot, "carrier", None)
+    if carrier is not None:
+        raise WorldError(f"kidnap {robot.name}: it is carried by {carrier.name}; only a robot on its own can be moved")
     x, y, yaw = pose[0], pose[1], pose[-1]
     if isinstance(robot, WheeledRobot):
         robot.diff_drive.teleport(np.array([x, y]), yaw)
