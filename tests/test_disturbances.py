@@ -1,4 +1,4 @@
-"""Disturbances: seeded gusty wind, marker occlusion, camera frame drops and video latency."""
+"""Disturbances: seeded gusty wind, marker occlusion, camera frame drops, video latency and kidnapping."""
 
 import math
 
@@ -10,7 +10,7 @@ import pytest
 from marsupial.world import World, WorldError
 from marsupial.world.disturbances import DisturbanceSchedule, GustyWind, When, apply_disturbances
 from marsupial.world.errors import UnknownNameError
-from marsupial.world.robots.base import Robot
+from marsupial.world.robots.base import Robot, yaw_of
 from marsupial.world.sensors.base import SensorConfig
 from marsupial.world.sensors.camera import OPTICAL_DOWN, Camera, Intrinsics
 
@@ -258,6 +258,21 @@ def test_video_latency_delays_readings_by_the_configured_time(tmp_path):
         ),
         ({"video_latency": {"camera": "rig/eye", "seconds": 0.2, "every": 3}}, r"unknown key\(s\) \['every'\]"),
         ({"video_latency": {"camera": "eye", "seconds": 0.2}}, r"a camera is named 'robot/sensor'"),
+        ({"kidnap": {"robot": "uav", "pose": [0, 0, 0]}}, r"world.kidnap: missing key\(s\) \['at'\]"),
+        (
+            {"kidnap": [{"robot": "uav", "at": -1.0, "pose": [0, 0, 0]}]},
+            r"world.kidnap\[0\].at: expected a number >= 0.0, got -1.0",
+        ),
+        (
+            {"kidnap": {"robot": "uav", "at": 1.0, "pose": [0, 0]}},
+            r"world.kidnap.pose: expected \[x, y, yaw\] or \[x, y, z, yaw\] \(m, rad, world frame\), got \[0, 0\]",
+        ),
+        ({"kidnap": {"robot": "uav", "at": 1.0, "pose": [0, "a", 0]}}, r"world.kidnap.pose\[1\]: expected a number"),
+        (
+            {"kidnap": {"robot": "uav", "at": 1.0, "pose": [0, 0, 0], "spread": [0.1, -0.1, 0]}},
+            r"world.kidnap.spread\[1\]: expected a number >= 0.0, got -0.1",
+        ),
+        ({"kidnap": {"robot": "uav", "at": 1.0, "pose": [0, 0, 0], "when": 3}}, r"unknown key\(s\) \['when'\]"),
     ],
 )
 def test_bad_specs_name_what_was_expected(tmp_path, spec, message):
@@ -277,3 +292,60 @@ def test_unknown_names_list_the_known_ones(tmp_path):
             apply_disturbances(world, {"occlusion": {"robot": "uav", "link": "tag"}})
         with pytest.raises(UnknownNameError, match="unknown sensor of rig 'rig/eyes'. Did you mean 'rig/eye'"):
             apply_disturbances(world, {"frame_drops": {"camera": "rig/eyes", "probability": 0.1}})
+        with pytest.raises(UnknownNameError, match="unknown robot 'chld'"):
+            apply_disturbances(world, {"kidnap": {"robot": "chld", "at": 1.0, "pose": [0, 0, 0]}})
+
+
+# ------------------------------------------------------------- kidnapping
+def _driving_child(seed=0):
+    world = World(scene="marsupial_yard", seed=seed)
+    child = world.add_robot("child_ugv", name="child", pose=[-2.0, 0.0, 0.0])
+    child.drive(0.2, 0.0)
+    return world, child
+
+
+def test_kidnap_moves_the_body_at_its_time_and_the_estimate_is_not_told():
+    world, child = _driving_child()
+    with world:
+        apply_disturbances(world, {"kidnap": {"robot": "child", "at": 2.0, "pose": [1.0, 2.0, math.pi]}})
+        world.step(1.95)
+        before = child.pose()[0]
+        assert before[0] > -1.9 and abs(before[1]) < 0.01  # still driving along +x
+        world.step(0.1)
+        p, q = child.pose()
+        assert p[:2] == pytest.approx([1.0, 2.0], abs=1e-6) and p[2] == pytest.approx(before[2], abs=1e-6)
+        assert abs(math.remainder(yaw_of(q) - math.pi, 2 * math.pi)) < 1e-6
+        v, w = child.velocity()
+        assert np.linalg.norm(v) < 1e-3 and np.linalg.norm(w) < 1e-3
+        estimate = child.estimator.estimate()
+        assert np.linalg.norm(estimate.position[:2] - before[:2]) < 0.05  # dead reckoning kept on where it was
+        assert DisturbanceSchedule.of(world).kidnapped == [(pytest.approx(2.0, abs=0.01), "child", (1.0, 2.0, math.pi))]
+        child.drive(0.2, 0.0)  # it drives on from where it was put: along -x now
+        world.step(1.0)
+        assert child.pose()[0][0] < 0.9
+
+
+def test_kidnap_spread_is_seeded_and_bounded():
+    spec = {"kidnap": {"robot": "child", "at": 0.5, "pose": [1.0, 2.0, 0.0], "spread": [0.3, 0.2, 0.5]}}
+    poses = []
+    for seed in (4, 4, 5):
+        world, child = _driving_child(seed)
+        with world:
+            schedule = apply_disturbances(world, spec)
+            world.step(0.6)
+            (_, _, pose), = schedule.kidnapped
+            assert child.pose()[0][:2] == pytest.approx(pose[:2], abs=1e-6)
+            poses.append(pose)
+    assert poses[0] == poses[1] != poses[2]  # the seed's draw, another seed's another
+    for x, y, yaw in poses:
+        assert abs(x - 1.0) <= 0.3 and abs(y - 2.0) <= 0.2 and abs(yaw) <= 0.5
+
+
+def test_a_child_carried_on_the_lift_cannot_be_kidnapped():
+    with World(scene="marsupial_yard", seed=0) as world:
+        mother = world.add_robot("mother_ugv", name="mother", pose=[0.0, 0.0, 0.0])
+        child = world.add_robot("child_ugv", name="child", pose=[-2.0, 0.0, 0.0])
+        mother.store(child)
+        apply_disturbances(world, {"kidnap": {"robot": "child", "at": 0.5, "pose": [1.0, 2.0, 0.0]}})
+        with pytest.raises(WorldError, match="kidnap child: it is carried by mother"):
+            world.step(1.0)

@@ -140,16 +140,50 @@ def test_coordinated_docking_ends_with_the_child_lifted_inside_the_capsule(tmp_p
     _, s_star = log.metric("ugv_s_star", robot="child")
     _, u_star = log.metric("ugv_u_star", robot="child")
     assert s_star[-1] > 1.5 * s_star[0] and abs(u_star[-1] - 0.5) < 0.02
-    # truth: the child rose 0.30 m with the platform and stands on the plate between the entrance walls
+    _assert_stored(log)
+    _, p_mother = log.poses("mother")
+    assert np.linalg.norm(p_mother[-1][:2] - p_mother[0][:2]) > 0.4  # carried away
+
+
+def _assert_stored(log, index: int = -1) -> None:
+    """Truth at pose sample ``index``: the child rose 0.30 m with the platform and stands on the plate between the
+    entrance walls."""
     _, p_child, q_child = log.poses("child", orientation=True)
     _, p_mother, q_mother = log.poses("mother", orientation=True)
-    assert p_child[-1][2] - p_child[0][2] == pytest.approx(0.30, abs=0.01)
-    R_mother = rotation_matrix(q_mother[-1])
-    x, y, _ = R_mother.T @ (p_child[-1] - p_mother[-1])
-    yaw = math.atan2(*(R_mother.T @ rotation_matrix(q_child[-1])[:, 0])[1::-1])
+    assert p_child[index][2] - p_child[0][2] == pytest.approx(0.30, abs=0.01)
+    R_mother = rotation_matrix(q_mother[index])
+    x, y, _ = R_mother.T @ (p_child[index] - p_mother[index])
+    yaw = math.atan2(*(R_mother.T @ rotation_matrix(q_child[index])[:, 0])[1::-1])
     assert -0.445 + 0.10 <= x <= -0.06 - 0.10  # the 0.2 m child wholly on the 0.385 m plate (x: -0.445 .. -0.06)
     assert abs(y) + 0.085 * math.cos(yaw) + 0.10 * abs(math.sin(yaw)) <= 0.095  # inside the 0.19 m entrance
-    assert np.linalg.norm(p_mother[-1][:2] - p_mother[0][:2]) > 0.4  # carried away
+
+
+KIDNAP_AT = 8.0  # s: the child is approaching (from 4.5 s with seed 0)
+KIDNAP_POSE = [-1.4, 0.2, 2.77]  # position B, its back towards the benchmark (it headed ≈ -0.37 rad)
+
+
+def test_a_kidnapped_child_falls_back_through_c4_relinks_and_docks(tmp_path):
+    """Zhao et al. §4.2, Experiment II: moved by hand while approaching, its back to the benchmark."""
+    kidnap = {"kidnap": [{"robot": "child", "at": KIDNAP_AT, "pose": KIDNAP_POSE}]}
+    result = marsupial.run("ugv_docking", log=tmp_path / "kidnap.mcap", set={"world.disturbances": kidnap})
+    assert result.outcome == "success", result.message
+    log = marsupial.read_log(result.log_path)
+    t, p_child = log.poses("child")
+    i = int(np.searchsorted(t, KIDNAP_AT + 0.2))
+    assert p_child[i][:2] == pytest.approx(KIDNAP_POSE[:2], abs=0.03)  # the world moved it (truth)
+    (fallback,) = [e for e in log.events_of("preemption") if e["by"] == "child linking"]  # once, after the kidnap
+    assert fallback["preempted"] == "child approaching" and fallback["by"] == "child linking"
+    assert fallback["why"].startswith("features_lost") and KIDNAP_AT < fallback["t"] < KIDNAP_AT + 2.0  # C4
+    started = [(e["t"], e["node"]) for e in log.events_of("state_change") if e["status"] == "RUNNING"]
+    after = [n for when, n in started if when >= fallback["t"]]
+    assert after[:2] == ["child linking", "child approaching"]  # relinked, then approached again
+    assert after.index("child matching") < after.index("child directed") < after.index("lifting")
+    mother = [n for _, n in started if n.startswith("mother ")]
+    assert mother == ["mother linking", "mother aligning", "mother directing"]  # it kept aligning meanwhile
+    outcomes = {e["node"]: e["status"] for e in log.events_of("outcome")}
+    assert outcomes["child directed"] == outcomes["lifting"] == "SUCCESS"
+    (lifted,) = [e["t"] for e in log.events_of("outcome") if e["node"] == "lifting"]
+    _assert_stored(log, int(np.searchsorted(log.poses("child")[0], lifted)) - 1)
 
 
 def test_carry_refuses_an_empty_platform_and_release_lowers_it_and_backs_the_child_out():

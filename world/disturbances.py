@@ -1,4 +1,4 @@
-"""Disturbances of a run: gusty wind, marker occlusion, camera frame drops and video latency.
+"""Disturbances of a run: gusty wind, marker occlusion, camera frame drops, video latency and kidnapping.
 
 A mission's ``world:`` section lists them and :func:`apply_disturbances`
 installs them::
@@ -9,8 +9,9 @@ installs them::
       - {robot: uav, link: tag_bundle, rate_hz: 0.05, duration: 1.5}   # random windows
     frame_drops: {camera: carrier/eye_in_hand, probability: 0.1}
     video_latency: {camera: uav/front_camera, seconds: 0.2}
+    kidnap: [{robot: child, at: 12.0, pose: [-1.0, 0.5, 3.14]}]          # moved by hand (Zhao, Exp. II)
 
-Every entry except ``wind`` is on during time windows (simulated seconds,
+Every entry except ``wind`` and ``kidnap`` (an instant, not a window) is on during time windows (simulated seconds,
 :class:`When`): one window ``start`` .. ``start + duration`` (default: from 0
 for ever) or, with ``rate_hz``, a seeded random train of windows of
 ``duration`` s. Every random draw comes from ``world.rng_for("disturbance/…")``,
@@ -32,13 +33,14 @@ import numpy as np
 import pybullet
 
 from .errors import UnknownNameError, WorldError
+from .kidnap import Kidnap, teleport
 
 if TYPE_CHECKING:
     from .robots.base import Robot
     from .sensors.base import Sensor
     from .world import World
 
-DISTURBANCE_KEYS = ("wind", "occlusion", "frame_drops", "video_latency")
+DISTURBANCE_KEYS = ("wind", "occlusion", "frame_drops", "video_latency", "kidnap")
 """Keys of a mission's ``world:`` section that :func:`apply_disturbances` handles."""
 
 _NEVER = sys.maxsize  # physics step of a change that never comes
@@ -231,7 +233,8 @@ class DisturbanceSchedule:
     that reaches them, so whatever reads the world at ``world.now`` sees the
     disturbances of that instant. Several disturbances on one target combine:
     a link is hidden while any occlusion is on; a sensor takes the largest
-    drop probability or latency that is on.
+    drop probability or latency that is on. Kidnaps happen once each, at the
+    step their time rounds to; :attr:`kidnapped` lists those done.
     """
 
     _of_world: weakref.WeakKeyDictionary[World, DisturbanceSchedule] = weakref.WeakKeyDictionary()
@@ -242,6 +245,9 @@ class DisturbanceSchedule:
         self._effects: list[_Effect] = []
         self._targets: dict[tuple[Any, ...], _HiddenVisuals | _SensorSetting] = {}
         self._applied: dict[int, list[Any]] = {}  # id(target) -> values last applied
+        self._kidnaps: list[Kidnap] = []  # pending, in time order
+        self._kidnaps_of: dict[str, int] = {}  # robot -> kidnaps added (each draws its own seeded stream)
+        self.kidnapped: list[tuple[float, str, tuple[float, ...]]] = []  # (time s, robot, pose) of those done
         self._next_step = _NEVER
         world.add_actor(self)
 
@@ -282,6 +288,34 @@ class DisturbanceSchedule:
             raise ValueError(f"latency must be >= 0 s, got {seconds}")
         self._add_sensor_effect(sensor, "latency_s", "video_latency", seconds, when)
 
+    def kidnap(
+        self, robot: Robot, at: float, pose: Sequence[float], spread: Sequence[float] = (0.0, 0.0, 0.0)
+    ) -> tuple[float, ...]:
+        """Move ``robot`` to ``pose`` (``[x, y, yaw]`` or ``[x, y, z, yaw]``, m, rad) at time ``at`` (s).
+
+        ``spread`` ``[dx, dy, dyaw]`` (m, m, rad) adds a seeded uniform offset
+        within ± each to x, y and yaw. Returns the pose that will be applied.
+        """
+        if len(pose) not in (3, 4) or len(spread) != 3:
+            raise ValueError(f"pose is [x, y, yaw] or [x, y, z, yaw] and spread [dx, dy, dyaw]; got {pose}, {spread}")
+        if not at >= 0 or min(spread) < 0:
+            raise ValueError(f"kidnap time must be >= 0 s and spread >= 0, got at={at}, spread={spread}")
+        world = self._world()
+        assert world is not None, "the world owns this schedule: it outlives it"
+        label = f"kidnap {robot.name}"
+        index = self._kidnaps_of[robot.name] = self._kidnaps_of.get(robot.name, -1) + 1
+        target = [float(v) for v in pose]
+        if any(spread):
+            rng = world.rng_for(f"disturbance/{label}/{index}")
+            dx, dy, dyaw = (rng.uniform(-h, h) for h in spread)
+            target[0] += dx
+            target[1] += dy
+            target[-1] += dyaw
+        self._kidnaps.append(Kidnap(robot, self._clock.steps_for(at), tuple(target)))
+        self._kidnaps.sort(key=lambda k: k.step)
+        self.update()
+        return tuple(target)
+
     def _add_sensor_effect(self, sensor: Sensor, field: str, what: str, value: float, when: When) -> None:
         key = (what, id(sensor))
         if key not in self._targets:
@@ -313,8 +347,12 @@ class DisturbanceSchedule:
     def update(self) -> None:
         """Advance every window to the current step and apply the targets whose state changed."""
         steps = self._clock.steps
+        while self._kidnaps and self._kidnaps[0].step <= steps:
+            kidnap = self._kidnaps.pop(0)
+            teleport(kidnap.robot, kidnap.pose)
+            self.kidnapped.append((self._clock.now, kidnap.robot.name, kidnap.pose))
         values: dict[int, list[Any]] = {id(t): [] for t in self._targets.values()}
-        next_step = _NEVER
+        next_step = self._kidnaps[0].step if self._kidnaps else _NEVER
         for effect in self._effects:
             while steps >= effect.end_step:
                 window = next(effect.windows, None)
@@ -342,8 +380,9 @@ class DisturbanceSchedule:
 def apply_disturbances(world: World, spec: dict[str, Any], where: str = "world") -> DisturbanceSchedule:
     """Install the disturbances of a mission's ``world:`` section (keys :data:`DISTURBANCE_KEYS`).
 
-    ``wind`` replaces ``world.wind`` with a :class:`GustyWind`; the other
-    keys (one entry or a list of entries) go to the world's
+    ``wind`` replaces ``world.wind`` with a :class:`GustyWind`; ``kidnap``
+    entries (``robot``, ``at`` s, ``pose``, optional ``spread``) are
+    :meth:`DisturbanceSchedule.kidnap` calls; the other keys (one entry or a list of entries) go to the world's
     :class:`DisturbanceSchedule`, which is returned. Bad input raises
     :class:`WorldError` naming the entry (``where`` prefixes the path, e.g.
     ``world.occlusion[1].start``), the unknown keys or the expected type;
@@ -352,7 +391,7 @@ def apply_disturbances(world: World, spec: dict[str, Any], where: str = "world")
     _check_keys(where, spec, DISTURBANCE_KEYS)
     # validate everything first: a bad entry leaves the world untouched
     wind = _wind(world, f"{where}.wind", spec["wind"]) if "wind" in spec else None
-    effects: list[tuple[Callable[..., None], tuple[Any, ...]]] = []
+    effects: list[tuple[Callable[..., object], tuple[Any, ...]]] = []
     for i, entry in _entries(where, "occlusion", spec):
         path = f"{where}.occlusion{i}"
         _check_keys(path, entry, ("robot", "link", *_WHEN_KEYS), required=("robot",))
@@ -373,6 +412,14 @@ def apply_disturbances(world: World, spec: dict[str, Any], where: str = "world")
         sensor = find_sensor(world, _text(path, "camera", entry["camera"]))
         seconds = _number(path, "seconds", entry["seconds"], 0.0)
         effects.append((DisturbanceSchedule.delay, (sensor, seconds, _when(path, entry))))
+    for i, entry in _entries(where, "kidnap", spec):
+        path = f"{where}.kidnap{i}"
+        _check_keys(path, entry, ("robot", "at", "pose", "spread"), required=("robot", "at", "pose"))
+        robot = world.robot(_text(path, "robot", entry["robot"]))
+        at = _number(path, "at", entry["at"], 0.0)
+        pose = _numbers(path, "pose", entry["pose"], (3, 4), "[x, y, yaw] or [x, y, z, yaw] (m, rad, world frame)")
+        spread = _numbers(path, "spread", entry.get("spread", [0.0, 0.0, 0.0]), (3,), "[dx, dy, dyaw] (m, rad)", 0.0)
+        effects.append((DisturbanceSchedule.kidnap, (robot, at, pose, spread)))
     if wind is not None:
         world.wind = wind
     schedule = DisturbanceSchedule.of(world)
@@ -433,6 +480,14 @@ def _number(where: str, key: str, value: Any, low: float | None = None, high: fl
         bounds = f"within [{low}, {high}]" if high is not None else f">= {low}"
         raise WorldError(f"{where}.{key}: expected a number {bounds}, got {value}")
     return float(value)
+
+
+def _numbers(
+    where: str, key: str, value: Any, lengths: Sequence[int], what: str, low: float | None = None
+) -> list[float]:
+    if not isinstance(value, (list, tuple)) or len(value) not in lengths:
+        raise WorldError(f"{where}.{key}: expected {what}, got {value!r}")
+    return [_number(where, f"{key}[{i}]", v, low) for i, v in enumerate(value)]
 
 
 def _positive(where: str, key: str, value: Any) -> float:

@@ -8,7 +8,8 @@ refilling the Bebop 2's 2700 mAh pack).
 
 :class:`RotorPowerModel` gives the electrical power of a multirotor from its
 thrust and air-relative velocity with momentum theory (formula in its
-docstring). :class:`BatteryGauge` is the battery-level sensor of a robot.
+docstring), :class:`GroundPowerModel` that of a small wheeled robot.
+:class:`BatteryGauge` is the battery-level sensor of a robot.
 
 Units: A, V, W, mAh, s; SOC is a fraction (the gauge reports percent).
 """
@@ -171,6 +172,39 @@ class RotorPowerModel:
     def hover_power(self, mass_kg: float, gravity: float = 9.81) -> float:
         """Electrical power (W) of a still hover of a ``mass_kg`` vehicle."""
         return self.power(mass_kg * gravity, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class GroundPowerModel:
+    """Electrical power of a small differential-drive robot.
+
+    ``P = P_electronics + [P_drive_idle + C_rr m g |v|] / η``  while the wheels turn (``v`` or ``ω`` ≠ 0),
+    ``P = P_electronics``  while they stand.
+
+    - ``P_electronics``: the onboard computer and camera, always on.
+    - ``P_drive_idle``: gear-motor and driver losses once the wheels turn (no-load current).
+    - ``C_rr m g |v|``: the work against rolling resistance (``C_rr`` dimensionless, ``m`` kg, ``v`` m/s).
+    - ``η``: the motor + gearbox + driver efficiency.
+
+    Figures and their sources: ``robots/ugv_docking.py`` (:data:`CHILD_POWER`) and docs/world.md §6.
+    """
+
+    electronics_W: float
+    drive_idle_W: float
+    rolling_resistance: float
+    drive_efficiency: float
+
+    def __post_init__(self) -> None:
+        efficiency_ok = 0 < self.drive_efficiency <= 1
+        if min(self.electronics_W, self.drive_idle_W, self.rolling_resistance) < 0 or not efficiency_ok:
+            raise ValueError(f"powers and C_rr >= 0 and an efficiency within (0, 1] expected; got {self}")
+
+    def power(self, mass_kg: float, v: float, omega: float, gravity: float = 9.81) -> float:
+        """Electrical power (W) of a ``mass_kg`` robot driving at ``v`` (m/s) and turning at ``omega`` (rad/s)."""
+        if v == 0.0 and omega == 0.0:
+            return self.electronics_W
+        rolling = self.rolling_resistance * mass_kg * gravity * abs(v)
+        return self.electronics_W + (self.drive_idle_W + rolling) / self.drive_efficiency
 
 
 def hover_endurance_s(spec: BatterySpec, power_W: float, soc: float = 1.0, dt: float = 1.0) -> float:

@@ -253,6 +253,12 @@ class WheeledOnboard(Onboard):
         return self._robot.odometry.estimate()  # type: ignore[attr-defined]
 
 
+class BatteryWheeledOnboard(WheeledOnboard, BatteryOnboard):
+    """A wheeled base with a battery monitor (``child_ugv``): drive commands, odometry and :meth:`battery`."""
+
+    __slots__ = ()
+
+
 class PlatformOnboard(WheeledOnboard):
     """A ground robot carrying a landing platform (``summit_xl``): its size and mount from the model."""
 

@@ -37,6 +37,9 @@ VIEW_KEY = "benchmark_view"
 """Blackboard key, under the child's name, of its :class:`BenchmarkView`."""
 NEVER_SEEN = 1 << 30
 """``lost_frames`` before the first capture: the benchmark counts as lost for any number of frames."""
+STALE_S = 1.0
+"""A newest frame older than this (s) is no view: the camera went unread (between two dockings, or before the
+first) and the benchmark counts as never seen until a fresh frame comes (5 camera periods at 5 Hz)."""
 
 
 @dataclass(frozen=True)
@@ -78,13 +81,19 @@ class BenchmarkView:
         self.lost_frames = NEVER_SEEN
         self.stamp = float("-inf")
 
-    def update(self) -> bool:
+    def update(self, now: float) -> bool:
         """Process the camera's newest frame if it is new; returns whether there was one.
 
-        Captured features are sent on :data:`FEATURES_TOPIC` and passed to ``on_features``.
+        ``now`` is the sim time (s): a newest frame older than :data:`STALE_S`
+        clears the view (nothing current, nothing held, never seen). Captured
+        features are sent on :data:`FEATURES_TOPIC` and passed to ``on_features``.
         """
         reading = self.camera.read()
-        if reading is None or reading.stamp <= self.stamp:
+        if reading is None or now - reading.stamp > STALE_S:
+            self.current = self.last = None
+            self.lost_frames = NEVER_SEEN
+            return False
+        if reading.stamp <= self.stamp:
             return False
         self.stamp = reading.stamp
         features = extract_features(reading.data.rgb, self.params)
@@ -127,7 +136,7 @@ def child_view(node: MissionNode[Any]) -> BenchmarkView:
 
         view = BenchmarkView(node.robot.sensor("camera"), node.link, on_features=record)
         node.write(key, view)
-    view.update()
+    view.update(node.now)
     return view
 
 

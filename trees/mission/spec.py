@@ -55,7 +55,9 @@ class WorldSpec(BaseModel):
     scene: str | None = Field(None, description="Scene name (world/scenes/<name>.yaml); none: an empty floor.")
     seed: int = Field(0, ge=0, le=2**63 - 1, description="Seed of all randomness in the world (an integer >= 0).")
     sensing: SensingSpec = Field(default_factory=SensingSpec)
-    disturbances: dict[str, Any] = Field(default_factory=dict, description="Disturbances (wind, sensor faults …).")
+    disturbances: dict[str, Any] = Field(
+        default_factory=dict, description="Disturbances (wind, sensor faults, kidnaps …; docs/world.md §7)."
+    )
 
 
 class TeamMember(BaseModel):

@@ -40,12 +40,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pybullet
 
-from ..onboard import LiftOnboard, simulates_hardware
+from ..energy import Battery, BatteryGauge, BatterySpec, GroundPowerModel
+from ..onboard import BatteryWheeledOnboard, LiftOnboard, simulates_hardware
 from ..sensors.base import SensorConfig
 from ..sensors.camera import OPTICAL_FORWARD, Camera, Intrinsics
 from .attachment import place_link_at, weld
@@ -67,6 +69,18 @@ LIFT_FORCE_N = 300.0  # lift motor force limit (N)
 LOWERED_TOLERANCE_M = 0.002  # the platform counts as lowered within this height (m)
 CARRY_FORCE_N = 1000.0  # strength of the weld holding a carried child on the platform (N)
 
+# The child's pack (the paper gives none): a 2S Li-ion pack of two 18650 cells, 7.2 V nominal, as small UGVs
+# carry; the cell figures are Samsung SDI INR18650-25R's datasheet: 2500 mAh, standard charge 1.25 A (CC) to
+# 4.20 V a cell (8.4 V for 2S). Open-circuit curve: energy.LIPO_CELL_V (the same Li-ion chemistry family).
+CHILD_BATTERY = BatterySpec(capacity_mAh=2500.0, cells=2, charge_current_A=1.25, charge_voltage_V=8.4)
+CHILD_POWER = GroundPowerModel(electronics_W=3.0, drive_idle_W=2.0, rolling_resistance=0.05, drive_efficiency=0.5)
+"""The child's power (docs/world.md §6): a Raspberry-Pi-3B-class computer (≈ 2 W active) plus its CMOS camera
+(≈ 1 W); 2 W of gear-motor no-load losses while the wheels turn; C_rr = 0.05 (small rubber wheels on a lab
+floor); 50 % motor + gearbox + driver efficiency. 7.4 W at 0.3 m/s (3 W standing): 2.6 h of driving on the
+19.1 Wh pack (2.5 Ah × 7.65 V mean open-circuit voltage), the order of a TurtleBot3 Burger's (ROBOTIS e-manual:
+19.98 Wh, "2 h 30 min")."""
+CHILD_BATTERY_GAUGE = SensorConfig(rate_hz=1.0, noise_std=0.01)  # V, as the quadrotors' gauges
+
 CHILD_LIMITS = DiffDriveLimits(max_speed=0.3, max_omega=1.5, max_accel=0.5, max_alpha=3.0)
 """Small indoor/outdoor differential child robot (the paper gives no speeds)."""
 MOTHER_LIMITS = DiffDriveLimits(max_speed=0.5, max_omega=0.5, max_accel=0.5, max_alpha=1.0)
@@ -77,7 +91,12 @@ class ChildUGV(WheeledRobot):
     """Child UGV, 17 cm wide, with a forward CMOS camera tilted up by 15°.
 
     Sensors: ``camera`` (:class:`Camera` on ``camera_link``, 640×480, 61°
-    vertical field of view, 10 Hz by default).
+    vertical field of view, 10 Hz by default) and ``battery`` (the
+    :class:`BatteryGauge` of its :data:`CHILD_BATTERY` pack, 1 Hz).
+
+    Battery: drawn at :data:`CHILD_POWER` while on the ground, charged at
+    the pack's charging current while the mother carries it on its lift (from
+    the moment the platform takes it up until it is released on the floor).
 
     Args:
         pose: footprint pose ``[x, y]``, ``[x, y, yaw]`` or ``[x, y, z, yaw]`` (world frame, m, rad).
@@ -85,13 +104,17 @@ class ChildUGV(WheeledRobot):
         camera_resolution: ``(width, height)`` in pixels; a smaller image keeps the
             61° field of view (the paper's pixel thresholds assume 640×480).
         camera: :class:`SensorConfig` overrides of the camera (``rate_hz``, ``noise_std``, …).
+        battery_soc: initial state of charge in [0, 1].
+        battery_capacity_mAh: capacity of the pack (mAh) in place of :data:`CHILD_BATTERY`'s.
 
     Attributes:
         size: ``(length, width)`` of the footprint (m), from the URDF.
         carrier: the :class:`MotherUGV` carrying this child on its platform, or ``None``.
+        battery: the :class:`Battery`; ``power`` the electrical power (W) drawn in the last step.
     """
 
     kind = "child_ugv"
+    onboard_class = BatteryWheeledOnboard
     urdf = "child_ugv.urdf"
     default_limits = CHILD_LIMITS
 
@@ -104,8 +127,18 @@ class ChildUGV(WheeledRobot):
         localization: str = "odometry",
         camera_resolution: Sequence[int] = CAMERA_RESOLUTION,
         camera: Mapping[str, Any] | None = None,
+        battery_soc: float = 1.0,
+        battery_capacity_mAh: float | None = None,
     ):
         super().__init__(world, name, pose=pose, limits=limits, localization=localization)
+        capacity = CHILD_BATTERY.capacity_mAh if battery_capacity_mAh is None else battery_capacity_mAh
+        self.battery = Battery(replace(CHILD_BATTERY, capacity_mAh=capacity), battery_soc)
+        self.power = 0.0
+        self._mass = sum(
+            pybullet.getDynamicsInfo(self.body_id, link, physicsClientId=self.cid)[0]
+            for link in range(-1, pybullet.getNumJoints(self.body_id, physicsClientId=self.cid))
+        )
+        self.add_sensor(BatteryGauge(world, f"{name}/battery", self.battery, CHILD_BATTERY_GAUGE))
         (shape,) = pybullet.getCollisionShapeData(self.body_id, -1, physicsClientId=self.cid)
         self.size: tuple[float, float] = (float(shape[3][0]), float(shape[3][1]))
         self.carrier: MotherUGV | None = None
@@ -147,14 +180,28 @@ class ChildUGV(WheeledRobot):
             super().drive(v, omega)
 
     def pre_physics(self, dt: float) -> None:
-        """Advance the drive, unless the mother is carrying this child."""
-        if self.carrier is None:
-            self.diff_drive.pre_physics(dt)
+        """Advance the drive and draw its power; carried by the mother: charge instead."""
+        if self.carrier is not None:
+            self.power = 0.0
+            self.battery.charge(dt)
+            return
+        self.diff_drive.pre_physics(dt)
+        self.power = CHILD_POWER.power(self._mass, self.diff_drive.v, self.diff_drive.omega)
+        self.battery.draw(self.power, dt)
+
+    @property
+    def charging(self) -> bool:
+        """True while carried on the mother's lift and the battery is not full."""
+        return self.carrier is not None and self.battery.soc < 1.0
 
     def state(self) -> dict[str, Any]:
-        """Pose, speeds, and the name of the carrier (``None`` on the ground)."""
+        """Pose, speeds, the name of the carrier (``None`` on the ground) and the battery."""
         state = super().state()
-        state["carrier"] = self.carrier.name if self.carrier is not None else None
+        b = self.battery
+        state.update(
+            carrier=self.carrier.name if self.carrier is not None else None,
+            battery_soc=b.soc, battery_voltage=b.voltage, battery_current=b.current_A, charging=self.charging,
+        )
         return state
 
 
