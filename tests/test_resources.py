@@ -129,6 +129,7 @@ CASES = {
     "relocalize": (LANDING, "uav", {}),
     "drive_pattern": (LANDING, "ugv", {}),
     "aperture_scan": ("mms", "mms", {}),
+    "approach_aperture": ("mms", "mms", {}),
 }
 
 

@@ -12,7 +12,9 @@ hits, into the belief (eq. 1). After the last pose the tracked candidates,
 ranked by belief (:func:`~.ranking.rank_apertures`), go to the blackboard.
 
 Blackboard: writes ``{robot}/apertures``, the list of
-:class:`~.ranking.RankedAperture` (highest score first). Events: a
+:class:`~.ranking.RankedAperture` (highest score first), and
+``{robot}/volumetric_map``, the map M it built (for base placement,
+:mod:`.approach`). Events: a
 ``state_change`` with phase ``scan_pose`` at each pose (its index and the
 candidates the window found) and ``ranked`` at the end (each candidate's
 score, map point m_A and centre, nav frame, m). SUCCESS with at least one
@@ -37,6 +39,8 @@ from .volumetric import VolumetricMap, sensor_cloud
 
 APERTURES = "apertures"
 """Blackboard key (under the robot's name) of the ranked candidates."""
+VOLUMETRIC_MAP = "volumetric_map"
+"""Blackboard key (under the robot's name) of the volumetric map M (:class:`~.volumetric.VolumetricMap`)."""
 
 LEVEL_POSE = (0.0, 1.15, 0.2, 0.0, 0.221, 0.0)
 """MMS arm angles (rad) with the camera level, 0.81 m ahead of and 0.40 m above ``arm_base_link``, facing forward."""
@@ -74,7 +78,7 @@ class ApertureScan(Skill["ApertureScan.Params"]):
     robot_kinds = (HasArmModel,)
     sensors = ("camera",)
     claims = ("arm",)
-    writes = (f"{{robot}}/{APERTURES}",)
+    writes = (f"{{robot}}/{APERTURES}", f"{{robot}}/{VOLUMETRIC_MAP}")
 
     def start(self) -> None:
         p = self.params
@@ -130,6 +134,7 @@ class ApertureScan(Skill["ApertureScan.Params"]):
     def _rank(self) -> Status:
         ranked = rank_apertures(self.tracks, self.belief, self.occupancy)
         self.write(f"{self.robot_name}/{APERTURES}", ranked)
+        self.write(f"{self.robot_name}/{VOLUMETRIC_MAP}", self.occupancy)
         phase_event(self, "ranked", apertures=[r.summary() for r in ranked])
         if not ranked:
             self.feedback_message = f"no aperture found in {len(self.poses)} scanning poses"
