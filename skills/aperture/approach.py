@@ -9,6 +9,15 @@ towards the goal such that the mounted arm workspace reaches the aperture,
 while the latter is also maintained within the eye-in-hand sensor field of
 view".
 
+The level scanning poses of ``aperture_scan`` see the wall, not the ground in
+front of it (the camera, 0.8 m up with a 29° half field of view, meets the
+floor only beyond the wall), so M holds the ground where the base would
+stand as unknown, which the placement refuses. The skill therefore first
+looks at the ground: the arm takes each of ``look_poses`` (the camera just
+beyond the base's front edge, pitched 55° and 70° down) panned by each of
+``look_pan``, and one depth frame from each is inserted into M
+(:mod:`.volumetric`).
+
 What it senses: the ranked apertures and M that ``aperture_scan`` wrote (in
 the navigation frame of the base estimate), the base estimate, the arm
 encoders, the arm's model and the camera's mount and intrinsics. The MMS has
@@ -23,7 +32,7 @@ Blackboard: reads ``{robot}/apertures`` (``aperture_scan``'s ranking) and
 ``{robot}/volumetric_map`` (M); writes ``{robot}/placement``, the
 :class:`~.placement.Placement` chosen. Events: a ``state_change`` with phase
 ``placement`` (the aperture, the placement, how many were feasible) and
-``reached`` (the estimated pose reached, its error from the placement, the
+``ground_look`` (each look pose), ``reached`` (the estimated pose reached, its error from the placement, the
 arm angles). RUNNING while nothing is ranked yet; FAILURE when the ranking is
 empty or no placement is feasible; SUCCESS once base and arm are there. The
 base stops and the arm holds when the skill ends.
@@ -43,7 +52,13 @@ from marsupial.world.capabilities import HasArmModel, HasBase
 from ..navigation import pure_pursuit
 from ..uav_docking.team import phase_event
 from .placement import RHO_M, CameraModel, Placement, PlacementParams, plan_placements
-from .scan import APERTURES, VOLUMETRIC_MAP
+from .scan import APERTURES, VOLUMETRIC_MAP, fresh_frame
+from .volumetric import sensor_cloud
+
+LOOK_POSES = ((0.0, -0.061, 1.616, 0.0, 0.976, 0.0), (0.0, 0.009, 1.54, 0.0, 1.244, 0.0))
+"""MMS arm angles (rad) with the camera 0.35 m ahead of and 0.50 m above ``arm_base_link`` (0.10 m beyond the base's
+front edge, 0.89 m up), pitched 55° and 70° down (closed-form IK): together they see the ground from the base's
+front edge to ≈1.8 m ahead of the camera."""
 
 PLACEMENT = "placement"
 """Blackboard key (under the robot's name) of the chosen :class:`~.placement.Placement`."""
@@ -73,6 +88,14 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
         """Heading error (rad) at which the base has turned to the placement's heading."""
         joint_tolerance: float = Field(0.01, gt=0.0)
         """Largest joint error (rad) at which the arm has reached the placement's angles."""
+        look_poses: tuple[tuple[float, float, float, float, float, float], ...] = LOOK_POSES
+        """Arm angles (rad) of the central ground-looking poses (none: M is used as the scan left it)."""
+        look_pan: tuple[float, ...] = (-0.6, 0.0, 0.6)
+        """Offsets (rad) of the first arm joint from each of ``look_poses``, one ground view each (chosen)."""
+        stride_px: int = Field(2, ge=1)
+        """Every how many depth pixels a ray of a ground view is inserted into M."""
+        max_range: float = Field(4.0, gt=0.0)
+        """Rays of the ground views are truncated at this range (m)."""
         camera: str = "camera"
         """The eye-in-hand RGB-D camera."""
 
@@ -84,9 +107,14 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
 
     def start(self) -> None:
         self.placement: Placement | None = None
-        self.stage = "plan"  # plan → drive → turn → arm
+        self.stage = "look"  # look → plan → drive → turn → arm
+        self.looks = [np.array(pose) + np.r_[pan, np.zeros(5)] for pose in self.params.look_poses
+                      for pan in self.params.look_pan]
+        self.arrived_at: float | None = None
 
     def step(self) -> Status:
+        if self.stage == "look":
+            return self._look()
         if self.placement is None:
             return self._plan()
         p, goal = self.params, self.placement.pose
@@ -119,6 +147,32 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
                     q=[round(float(x), 3) for x in self.robot.joint_positions()])
         self.feedback_message = f"at the placement ({distance:.2f} m, {yaw_error:+.2f} rad off), aperture in view"
         return Status.SUCCESS
+
+    def _look(self) -> Status:
+        """Move through the ground-looking poses; one new depth frame from each goes into M."""
+        occupancy = self.read(f"{self.robot_name}/{VOLUMETRIC_MAP}")
+        if occupancy is None:
+            self.robot.stop()
+            self.feedback_message = "waiting for ranked apertures and the map (aperture_scan)"
+            return Status.RUNNING
+        if not self.looks:
+            self.stage = "plan"
+            return self._plan()
+        target = self.looks[0]
+        self.robot.set_joint_targets(target)
+        if float(np.max(np.abs(self.robot.joint_positions() - target))) > self.params.joint_tolerance:
+            self.feedback_message = f"looking at the ground: {len(self.looks)} views to go"
+            return Status.RUNNING
+        if self.arrived_at is None:
+            self.arrived_at = self.now
+        taken = fresh_frame(self.robot, self.params.camera, self.arrived_at)
+        if taken is not None:
+            occupancy.insert(sensor_cloud(taken[0], self.params.stride_px, self.params.max_range))
+            phase_event(self, "ground_look", q=[round(float(x), 3) for x in target])
+            self.looks.pop(0)
+            self.arrived_at = None
+        self.feedback_message = f"looking at the ground: {len(self.looks)} views to go"
+        return Status.RUNNING
 
     def _plan(self) -> Status:
         """Placements for the chosen aperture from the scan's M; the best is the goal."""

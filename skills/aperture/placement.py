@@ -34,9 +34,10 @@ checked (the paper's collision-aware planner [36]); only the camera's line
 of sight to t_a through M is. The paper stops at the first feasible
 candidate; here every candidate is tested and the feasible ones are ranked by
 :func:`placement_cost` (drive distance, turn and joint motion). Cells under
-the robot's present footprint count as free when M never saw them (the robot
-stands there). python-fcl's octree collision treats unknown space as free, so
-the footprint check is done on the collapsed grid instead.
+the robot's present footprint count as free (the robot stands there: M holds
+them unknown, or occupied where the camera saw the robot's own body).
+python-fcl's octree collision treats unknown space as free, so the footprint
+check is done on the collapsed grid instead.
 
 Frames and units: the navigation frame of the base estimate (``odom``), z up,
 metres, radians; base poses are of ``base_footprint`` on the ground plane
@@ -206,7 +207,7 @@ class FootprintGrid:
         lo, hi: ground corners ``(x, y)`` of the box (nav, m).
         z_band: heights ``(z_lo, z_hi)`` (nav, m) the base occupies.
         known_free: ground points ``(m, 2)`` (nav, m) of space the robot itself stands in: their cells count
-            as free where M never saw them.
+            as free (what M holds there, unknown or occupied, is the robot's own body).
     """
 
     def __init__(self, occupancy: VolumetricMap, lo: np.ndarray, hi: np.ndarray, z_band: tuple[float, float],
@@ -236,12 +237,11 @@ class FootprintGrid:
         self.key_lo = key_lo[:2]
         self.shape = shape[:2]
         self.occupied = (states == OCCUPIED).any(axis=2)
-        unseen = (states == UNKNOWN).any(axis=2) & ~self.occupied
+        self.blocked = self.occupied | (states == UNKNOWN).any(axis=2)
         if known_free is not None and len(known_free):
             ij = self._cells(np.asarray(known_free, dtype=float))
             inside = self._inside(ij)
-            unseen[ij[inside, 0], ij[inside, 1]] = False
-        self.blocked = self.occupied | unseen
+            self.blocked[ij[inside, 0], ij[inside, 1]] = False
 
     def _cells(self, points: np.ndarray) -> np.ndarray:
         return np.floor(points / self.resolution).astype(np.int64) - self.key_lo

@@ -24,6 +24,8 @@ is when the skill ends.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from py_trees.common import Status
 from pydantic import Field
@@ -44,6 +46,18 @@ VOLUMETRIC_MAP = "volumetric_map"
 
 LEVEL_POSE = (0.0, 1.15, 0.2, 0.0, 0.221, 0.0)
 """MMS arm angles (rad) with the camera level, 0.81 m ahead of and 0.40 m above ``arm_base_link``, facing forward."""
+
+
+def fresh_frame(robot: Any, camera: str, after: float) -> tuple[DepthFrame, float] | None:
+    """The camera's newest depth frame, posed (:func:`~.detection.eye_in_hand_frame`), if stamped after ``after`` (s).
+
+    ``robot``: the MMS's onboard interface; returns the frame and its stamp (s), else ``None``.
+    """
+    reading = robot.sensor(camera).read()
+    if reading is None or reading.stamp <= after:
+        return None
+    image = reading.data
+    return eye_in_hand_frame(robot, image.depth, image.K, robot.joint_positions(), camera), reading.stamp
 
 
 class ApertureScan(Skill["ApertureScan.Params"]):
@@ -110,13 +124,12 @@ class ApertureScan(Skill["ApertureScan.Params"]):
 
     def _take_frame(self) -> None:
         """Keep the camera's newest frame if it was taken since the arm reached the pose."""
-        reading = self.robot.sensor(self.params.camera).read()
-        if reading is None or self.arrived_at is None or reading.stamp <= max(self.arrived_at, self.last_stamp):
+        if self.arrived_at is None:
             return
-        self.last_stamp = reading.stamp
-        image = reading.data
-        self.frames.append(eye_in_hand_frame(self.robot, image.depth, image.K, self.robot.joint_positions(),
-                                             self.params.camera))
+        taken = fresh_frame(self.robot, self.params.camera, max(self.arrived_at, self.last_stamp))
+        if taken is not None:
+            frame, self.last_stamp = taken
+            self.frames.append(frame)
 
     def _integrate(self) -> None:
         """Detect in the pose's window; the newest frame into M, then into the belief with the detections' hits."""
