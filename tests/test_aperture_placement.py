@@ -3,7 +3,9 @@
 The volumetric map M is built from synthetic rays (no rendering): a wall
 2.4 m ahead of the robot with a 0.25 × 0.20 m hole centred 0.6 m up, a back
 wall behind the hole, and the floor in front of the wall, all seen. The
-arm is the MMS's pinocchio model; the camera its eye-in-hand camera.
+arm is the MMS's pinocchio model; the camera its eye-in-hand camera. The
+launch pose is checked on a synthetic fronto-parallel image, then on the
+detection and profile analysis of frames rendered before a mockup opening.
 """
 
 from __future__ import annotations
@@ -12,12 +14,22 @@ import math
 
 import numpy as np
 import pytest
+from shapely.geometry import Point
+from test_aperture_detection import STANDOFF_M, WALL_FACE_Y, _frames
 
-from marsupial.skills.aperture.detection import FrontoParallelView, InertialFrame, fronto_parallel_rotation
+from marsupial.skills.aperture import mav_contour, plan_launches, profile_analysis
+from marsupial.skills.aperture.detection import (
+    DetectionParams,
+    FrontoParallelView,
+    InertialFrame,
+    detect_apertures,
+    fronto_parallel_rotation,
+)
 from marsupial.skills.aperture.launch_pose import LaunchParams, attitude_ok, plan_launch, roll_pitch_yaw
 from marsupial.skills.aperture.placement import CameraModel, PlacementParams, plan_placements
 from marsupial.skills.aperture.profile import LaunchConfiguration
 from marsupial.skills.aperture.volumetric import FREE, SensorCloud, VolumetricMap
+from marsupial.world.apertures import aperture_outline
 from marsupial.world.kinematics import ArmKinematics
 from marsupial.world.robots.mms import CAMERA_INTRINSICS
 from marsupial.world.sensors.camera import OPTICAL_FORWARD
@@ -160,3 +172,19 @@ def test_an_over_tilted_launch_is_rejected():
     leaning = plan_launch(_config(CX, CY, 0.0), view, frame, params)
     assert not leaning.feasible and abs(leaning.pitch) == pytest.approx(tilt)
     assert attitude_ok(np.eye(3), params.alpha_launch) and not attitude_ok(leaning.R_launch, params.alpha_launch)
+
+
+def test_launch_plans_of_a_detected_aperture_go_through_the_true_opening():
+    """Rendered frames 0.6 m before the orthogonal opening → detection → profile analysis → launch plans."""
+    outline = aperture_outline("orthogonal")
+    found = detect_apertures(_frames(outline.centroid.x, STANDOFF_M, 3), DetectionParams(n_frames=3))[0]
+    configs = profile_analysis(found.mask(), mav_contour(found.view.plane_depth, found.view.K))
+    params = LaunchParams()
+    plans = plan_launches(found, configs, params)
+    assert plans and len(plans) <= len(configs)
+    for plan in plans:
+        assert plan.pre_launch[1] == pytest.approx(WALL_FACE_Y, abs=0.01)  # on the wall's face
+        assert outline.contains(Point(plan.pre_launch[0], plan.pre_launch[2]))
+        assert plan.goal[1] == pytest.approx(WALL_FACE_Y - params.d_l, abs=0.015)  # d_l before it (n̂ ≈ −y)
+        assert plan.launch_position[1] == pytest.approx(WALL_FACE_Y + params.d_l, abs=0.015)  # d_l past it
+        assert abs(plan.roll) <= params.alpha_launch and abs(plan.pitch) <= params.alpha_launch
