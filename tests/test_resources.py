@@ -141,6 +141,7 @@ CASES = {
     "lift": ("yard_boarded", "mother", {}),
     "carry": ("yard_stored", "mother", {"target": (1.0, 0.0)}),
     "release": ("yard_stored", "mother", {}),
+    "approach_aperture": ("mms", "mms", {}),
 }
 
 

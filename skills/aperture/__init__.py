@@ -15,18 +15,26 @@ encoders and the arm's URDF model):
   and unknown voxels) from the posed depth frames;
 - :mod:`.belief` — the log-odds aperture belief L_a over M's voxels (§IV-C, eq. 1);
 - :mod:`.ranking` — candidates tracked across windows, ranked by L_a;
-- :mod:`.scan` — the ``aperture_scan`` skill: arm scanning poses → M, L_a, ranked candidates.
+- :mod:`.placement` — base placement (§IV-D): cone samples checked against M and by the arm's IK;
+- :mod:`.launch_pose` — pre-launch pose ξ_MAV, the Phase I goal g, the insertion line, the launch attitude
+  check (§IV-E output, §IV-F);
+- :mod:`.scan` — the ``aperture_scan`` skill: arm scanning poses → M, L_a, ranked candidates;
+- :mod:`.approach` — the ``approach_aperture`` skill: a placement for a ranked aperture, driven to.
 """
 
 from .belief import ApertureBelief, BeliefParams, aperture_region
 from .detection import ApertureCandidate, DepthFrame, DetectionParams, detect_apertures, eye_in_hand_frame
+from .launch_pose import LaunchParams, LaunchPlan, attitude_ok, plan_launch, plan_launches, pre_launch_pose
+from .placement import CameraModel, Placement, PlacementParams, plan_placements
 from .profile import LaunchConfiguration, ProfileParams, profile_analysis
 from .ranking import RankedAperture, rank_apertures
 from .silhouette import mav_contour, mav_silhouette
 from .volumetric import VolumetricMap, sensor_cloud
 
 __all__ = [
-    "ApertureBelief", "ApertureCandidate", "BeliefParams", "DepthFrame", "DetectionParams", "LaunchConfiguration",
-    "ProfileParams", "RankedAperture", "VolumetricMap", "aperture_region", "detect_apertures", "eye_in_hand_frame",
-    "mav_contour", "mav_silhouette", "profile_analysis", "rank_apertures", "sensor_cloud",
+    "ApertureBelief", "ApertureCandidate", "BeliefParams", "CameraModel", "DepthFrame", "DetectionParams",
+    "LaunchConfiguration", "LaunchParams", "LaunchPlan", "Placement", "PlacementParams", "ProfileParams",
+    "RankedAperture", "VolumetricMap", "aperture_region", "attitude_ok", "detect_apertures", "eye_in_hand_frame",
+    "mav_contour", "mav_silhouette", "plan_launch", "plan_launches", "plan_placements", "pre_launch_pose",
+    "profile_analysis", "rank_apertures", "sensor_cloud",
 ]

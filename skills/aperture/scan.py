@@ -12,7 +12,9 @@ hits, into the belief (eq. 1). After the last pose the tracked candidates,
 ranked by belief (:func:`~.ranking.rank_apertures`), go to the blackboard.
 
 Blackboard: writes ``{robot}/apertures``, the list of
-:class:`~.ranking.RankedAperture` (highest score first). Events: a
+:class:`~.ranking.RankedAperture` (highest score first), and
+``{robot}/volumetric_map``, the map M it built (for base placement,
+:mod:`.approach`). Events: a
 ``state_change`` with phase ``scan_pose`` at each pose (its index and the
 candidates the window found) and ``ranked`` at the end (each candidate's
 score, map point m_A and centre, nav frame, m). SUCCESS with at least one
@@ -21,6 +23,8 @@ is when the skill ends.
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 from py_trees.common import Status
@@ -37,9 +41,23 @@ from .volumetric import VolumetricMap, sensor_cloud
 
 APERTURES = "apertures"
 """Blackboard key (under the robot's name) of the ranked candidates."""
+VOLUMETRIC_MAP = "volumetric_map"
+"""Blackboard key (under the robot's name) of the volumetric map M (:class:`~.volumetric.VolumetricMap`)."""
 
 LEVEL_POSE = (0.0, 1.15, 0.2, 0.0, 0.221, 0.0)
 """MMS arm angles (rad) with the camera level, 0.81 m ahead of and 0.40 m above ``arm_base_link``, facing forward."""
+
+
+def fresh_frame(robot: Any, camera: str, after: float) -> tuple[DepthFrame, float] | None:
+    """The camera's newest depth frame, posed (:func:`~.detection.eye_in_hand_frame`), if stamped after ``after`` (s).
+
+    ``robot``: the MMS's onboard interface; returns the frame and its stamp (s), else ``None``.
+    """
+    reading = robot.sensor(camera).read()
+    if reading is None or reading.stamp <= after:
+        return None
+    image = reading.data
+    return eye_in_hand_frame(robot, image.depth, image.K, robot.joint_positions(), camera), reading.stamp
 
 
 class ApertureScan(Skill["ApertureScan.Params"]):
@@ -74,7 +92,7 @@ class ApertureScan(Skill["ApertureScan.Params"]):
     robot_kinds = (HasArmModel,)
     sensors = ("camera",)
     claims = ("arm",)
-    writes = (f"{{robot}}/{APERTURES}",)
+    writes = (f"{{robot}}/{APERTURES}", f"{{robot}}/{VOLUMETRIC_MAP}")
 
     def start(self) -> None:
         p = self.params
@@ -106,13 +124,12 @@ class ApertureScan(Skill["ApertureScan.Params"]):
 
     def _take_frame(self) -> None:
         """Keep the camera's newest frame if it was taken since the arm reached the pose."""
-        reading = self.robot.sensor(self.params.camera).read()
-        if reading is None or self.arrived_at is None or reading.stamp <= max(self.arrived_at, self.last_stamp):
+        if self.arrived_at is None:
             return
-        self.last_stamp = reading.stamp
-        image = reading.data
-        self.frames.append(eye_in_hand_frame(self.robot, image.depth, image.K, self.robot.joint_positions(),
-                                             self.params.camera))
+        taken = fresh_frame(self.robot, self.params.camera, max(self.arrived_at, self.last_stamp))
+        if taken is not None:
+            frame, self.last_stamp = taken
+            self.frames.append(frame)
 
     def _integrate(self) -> None:
         """Detect in the pose's window; the newest frame into M, then into the belief with the detections' hits."""
@@ -130,6 +147,7 @@ class ApertureScan(Skill["ApertureScan.Params"]):
     def _rank(self) -> Status:
         ranked = rank_apertures(self.tracks, self.belief, self.occupancy)
         self.write(f"{self.robot_name}/{APERTURES}", ranked)
+        self.write(f"{self.robot_name}/{VOLUMETRIC_MAP}", self.occupancy)
         phase_event(self, "ranked", apertures=[r.summary() for r in ranked])
         if not ranked:
             self.feedback_message = f"no aperture found in {len(self.poses)} scanning poses"

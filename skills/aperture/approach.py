@@ -1,0 +1,208 @@
+"""``approach_aperture``: the MMS drives to a base placement from which its eye-in-hand camera sees the aperture.
+
+Arora & Papachristos, §IV-D: from the most consistent aperture m_A and its
+plane normal, base poses are sampled in the ρ = 2 m cone in front of it,
+checked against the volumetric map M and for an arm configuration keeping
+the aperture in the camera's view (:func:`~.placement.plan_placements`);
+"once a feasible solution is found ... the MMS base is commanded to navigate
+towards the goal such that the mounted arm workspace reaches the aperture,
+while the latter is also maintained within the eye-in-hand sensor field of
+view".
+
+The level scanning poses of ``aperture_scan`` see the wall, not the ground in
+front of it (the camera, 0.8 m up with a 29° half field of view, meets the
+floor only beyond the wall), so M holds the ground where the base would
+stand as unknown, which the placement refuses. The skill therefore first
+looks at the ground: the arm takes each of ``look_poses`` (the camera just
+beyond the base's front edge, pitched 55° and 70° down) panned by each of
+``look_pan``, and one depth frame from each is inserted into M
+(:mod:`.volumetric`).
+
+What it senses: the ranked apertures and M that ``aperture_scan`` wrote (in
+the navigation frame of the base estimate), the base estimate, the arm
+encoders, the arm's model and the camera's mount and intrinsics. The MMS has
+no LiDAR, so ``navigate``'s obstacle avoidance cannot run; the base goes to
+the placement on its estimate (turn toward it, pure pursuit —
+:func:`~marsupial.skills.navigation.pure_pursuit` — then turn to the
+placement's heading), over ground M showed free at the placement only: the
+straight drive there is not checked against M. Then the arm moves to the
+placement's joint angles, the camera looking at m_A from ``standoff``.
+
+Blackboard: reads ``{robot}/apertures`` (``aperture_scan``'s ranking) and
+``{robot}/volumetric_map`` (M); writes ``{robot}/placement``, the
+:class:`~.placement.Placement` chosen. Events: a ``state_change`` with phase
+``placement`` (the aperture, the placement, how many were feasible) and
+``ground_look`` (each look pose), ``reached`` (the estimated pose reached, its error from the placement, the
+arm angles). RUNNING while nothing is ranked yet; FAILURE when the ranking is
+empty or no placement is feasible; SUCCESS once base and arm are there. The
+base stops and the arm holds when the skill ends.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from py_trees.common import Status
+from pydantic import Field
+
+from marsupial.trees.skill import NodeParams, Skill
+from marsupial.world.capabilities import HasArmModel, HasBase
+
+from ..navigation import pure_pursuit
+from ..uav_docking.team import phase_event
+from .placement import RHO_M, CameraModel, Placement, PlacementParams, plan_placements
+from .scan import APERTURES, VOLUMETRIC_MAP, fresh_frame
+from .volumetric import sensor_cloud
+
+LOOK_POSES = ((0.0, -0.061, 1.616, 0.0, 0.976, 0.0), (0.0, 0.009, 1.54, 0.0, 1.244, 0.0))
+"""MMS arm angles (rad) with the camera 0.35 m ahead of and 0.50 m above ``arm_base_link`` (0.10 m beyond the base's
+front edge, 0.89 m up), pitched 55° and 70° down (closed-form IK): together they see the ground from the base's
+front edge to ≈1.8 m ahead of the camera."""
+
+PLACEMENT = "placement"
+"""Blackboard key (under the robot's name) of the chosen :class:`~.placement.Placement`."""
+
+
+class ApproachAperture(Skill["ApproachAperture.Params"]):
+    """Drive the MMS to a collision-free base placement from which its arm camera sees and reaches a ranked aperture."""
+
+    class Params(NodeParams):
+        rank: int = Field(0, ge=0)
+        """Which ranked aperture to approach (0: the most consistent, §IV-D)."""
+        rho: float = Field(RHO_M, gt=0.0)
+        """ρ (m), radius of the sampling cone in front of the aperture (§IV-D: 2 m)."""
+        half_angle: float = Field(math.radians(45.0), gt=0.0, lt=math.pi / 2)
+        """Half-angle (rad) of the cone about the plane normal's ground projection (chosen)."""
+        samples: int = Field(300, ge=1)
+        """Candidate base poses drawn in the cone."""
+        standoff: float = Field(0.5, gt=0.0)
+        """Distance (m) of the camera from m_A along the plane normal."""
+        margin: float = Field(0.05, ge=0.0)
+        """Inflation (m) of the base rectangle in the collision check against M."""
+        max_speed: float = Field(0.3, gt=0.0)
+        """Base speed limit (m/s) on the approach (chosen: slow near the structure)."""
+        position_tolerance: float = Field(0.05, gt=0.0)
+        """Distance (m) of the estimate from the placement at which the base has arrived."""
+        yaw_tolerance: float = Field(0.05, gt=0.0)
+        """Heading error (rad) at which the base has turned to the placement's heading."""
+        joint_tolerance: float = Field(0.01, gt=0.0)
+        """Largest joint error (rad) at which the arm has reached the placement's angles."""
+        look_poses: tuple[tuple[float, float, float, float, float, float], ...] = LOOK_POSES
+        """Arm angles (rad) of the central ground-looking poses (none: M is used as the scan left it)."""
+        look_pan: tuple[float, ...] = (-0.6, 0.0, 0.6)
+        """Offsets (rad) of the first arm joint from each of ``look_poses``, one ground view each (chosen)."""
+        stride_px: int = Field(2, ge=1)
+        """Every how many depth pixels a ray of a ground view is inserted into M."""
+        max_range: float = Field(4.0, gt=0.0)
+        """Rays of the ground views are truncated at this range (m)."""
+        camera: str = "camera"
+        """The eye-in-hand RGB-D camera."""
+
+    robot_kinds = (HasBase, HasArmModel)
+    sensors = ("camera",)
+    claims = ("base", "arm")
+    reads = (f"{{robot}}/{APERTURES}", f"{{robot}}/{VOLUMETRIC_MAP}")
+    writes = (f"{{robot}}/{PLACEMENT}",)
+
+    def start(self) -> None:
+        self.placement: Placement | None = None
+        self.stage = "look"  # look → plan → drive → turn → arm
+        self.looks = [np.array(pose) + np.r_[pan, np.zeros(5)] for pose in self.params.look_poses
+                      for pan in self.params.look_pan]
+        self.arrived_at: float | None = None
+
+    def step(self) -> Status:
+        if self.stage == "look":
+            return self._look()
+        if self.placement is None:
+            return self._plan()
+        p, goal = self.params, self.placement.pose
+        estimate = self.robot.estimate()
+        offset = goal[:2] - estimate.position[:2]
+        distance = float(np.hypot(*offset))
+        yaw_error = math.remainder(goal[2] - estimate.yaw, math.tau)
+        if self.stage == "drive" and distance > p.position_tolerance:
+            c, s = math.cos(estimate.yaw), math.sin(estimate.yaw)
+            goal_R = np.array([c * offset[0] + s * offset[1], -s * offset[0] + c * offset[1]])
+            limit = min(p.max_speed, self.robot.limits.max_speed, math.sqrt(distance))  # slowing to a stop
+            self.robot.drive(*pure_pursuit(goal_R, limit, self.robot.limits.max_omega))
+            self.feedback_message = f"driving to the placement: {distance:.2f} m"
+            return Status.RUNNING
+        if self.stage in ("drive", "turn") and abs(yaw_error) > p.yaw_tolerance:
+            self.stage = "turn"
+            self.robot.drive(0.0, float(np.clip(2.0 * yaw_error, -0.5, 0.5)))
+            self.feedback_message = f"turning to the placement's heading: {yaw_error:+.2f} rad"
+            return Status.RUNNING
+        if self.stage != "arm":
+            self.stage = "arm"
+            self.robot.stop()
+        self.robot.set_joint_targets(self.placement.q)
+        joint_error = float(np.max(np.abs(self.robot.joint_positions() - self.placement.q)))
+        if joint_error > p.joint_tolerance:
+            self.feedback_message = f"arm to the viewing pose: {joint_error:.3f} rad"
+            return Status.RUNNING
+        phase_event(self, "reached", pose=[round(float(x), 3) for x in (*estimate.position[:2], estimate.yaw)],
+                    error_m=round(distance, 3), yaw_error=round(yaw_error, 3),
+                    q=[round(float(x), 3) for x in self.robot.joint_positions()])
+        self.feedback_message = f"at the placement ({distance:.2f} m, {yaw_error:+.2f} rad off), aperture in view"
+        return Status.SUCCESS
+
+    def _look(self) -> Status:
+        """Move through the ground-looking poses; one new depth frame from each goes into M."""
+        occupancy = self.read(f"{self.robot_name}/{VOLUMETRIC_MAP}")
+        if occupancy is None:
+            self.robot.stop()
+            self.feedback_message = "waiting for ranked apertures and the map (aperture_scan)"
+            return Status.RUNNING
+        if not self.looks:
+            self.stage = "plan"
+            return self._plan()
+        target = self.looks[0]
+        self.robot.set_joint_targets(target)
+        if float(np.max(np.abs(self.robot.joint_positions() - target))) > self.params.joint_tolerance:
+            self.feedback_message = f"looking at the ground: {len(self.looks)} views to go"
+            return Status.RUNNING
+        if self.arrived_at is None:
+            self.arrived_at = self.now
+        taken = fresh_frame(self.robot, self.params.camera, self.arrived_at)
+        if taken is not None:
+            occupancy.insert(sensor_cloud(taken[0], self.params.stride_px, self.params.max_range))
+            phase_event(self, "ground_look", q=[round(float(x), 3) for x in target])
+            self.looks.pop(0)
+            self.arrived_at = None
+        self.feedback_message = f"looking at the ground: {len(self.looks)} views to go"
+        return Status.RUNNING
+
+    def _plan(self) -> Status:
+        """Placements for the chosen aperture from the scan's M; the best is the goal."""
+        p = self.params
+        ranked = self.read(f"{self.robot_name}/{APERTURES}")
+        occupancy = self.read(f"{self.robot_name}/{VOLUMETRIC_MAP}")
+        if ranked is None or occupancy is None:
+            self.robot.stop()
+            self.feedback_message = "waiting for ranked apertures and the map (aperture_scan)"
+            return Status.RUNNING
+        if len(ranked) <= p.rank:
+            self.feedback_message = f"{len(ranked)} apertures ranked: no aperture of rank {p.rank}"
+            return Status.FAILURE
+        aperture = ranked[p.rank]
+        estimate = self.robot.estimate()
+        params = PlacementParams(rho=p.rho, half_angle=p.half_angle, samples=p.samples, standoff=p.standoff,
+                                 margin=p.margin)
+        placements = plan_placements(
+            aperture.m_A, aperture.normal_nav, occupancy, self.robot.arm_kinematics,
+            CameraModel.of_port(self.robot.sensor(p.camera)), self.robot.arm_mount(),
+            (*estimate.position[:2], estimate.yaw), self.robot.joint_positions(), float(estimate.position[2]),
+            self.context.rng(f"{self.name}/placement"), params,
+        )
+        phase_event(self, "placement", aperture=[round(float(x), 3) for x in aperture.m_A], feasible=len(placements),
+                    placement=placements[0].summary() if placements else None)
+        if not placements:
+            self.feedback_message = f"no feasible base placement among {p.samples} samples in the cone"
+            return Status.FAILURE
+        self.placement, self.stage = placements[0], "drive"
+        self.write(f"{self.robot_name}/{PLACEMENT}", self.placement)
+        self.robot.stop()
+        self.feedback_message = f"placement chosen among {len(placements)} feasible"
+        return Status.RUNNING
