@@ -370,9 +370,13 @@ def plot_exp3(exp3: dict[str, Any], img: Path) -> str:
                                ("mean docking time (s)", "mean path length of the child (m)"), strict=True):
         for k, label in enumerate(("coordinated", "independent")):
             rows = exp3["approaches"][label]["per_location"]
-            ax.bar(x + (k - 0.5) * 0.38, [r[key] or 0 for r in rows], 0.38, label=label)
+            offset = x + (k - 0.5) * 0.38
+            ax.bar(offset, [r[key] or 0 for r in rows], 0.38, label=label, color=f"C{k}")
+            for where, r in zip(offset, rows, strict=True):
+                if r[key] is None:  # no run from there docked
+                    ax.plot(where, 0, "x", color=f"C{k}", ms=9, mew=2)
         ax.set_ylabel(ylabel)
-        ax.set_xlabel("departure location")
+        ax.set_xlabel("departure location (×: no run docked)")
         ax.set_xticks(x)
         ax.legend()
     fig.suptitle("Experiment III per departure location (Fig. 17)")
@@ -391,6 +395,7 @@ def plot_repeatability(repeat: dict[str, Any], img: Path) -> str:
         low, high = np.array([r["ci95"] for r in rows]).T
         ax.errorbar(np.array([r["d_mc_m"] for r in rows]) + 0.02 * k, 100 * rate,
                     yerr=100 * np.vstack([rate - low, high - rate]), marker="o", capsize=3,
+                    ls="-" if len(rows) == len(GRADES_M) else "none",  # no curve across grades not run
                     label=f"{label} (Wilson 95 %)")
     ax.axhline(100 * PAPER_MIN_SUCCESS[0] / PAPER_MIN_SUCCESS[1], color="r", ls=":", label="paper's minimum, 26/30")
     ax.set_xlabel("d_mc (m)")
@@ -534,8 +539,9 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path) -> None:
         "",
         f"From `{results['example_run']['pose']}` (the first docked coordinated Experiment III run): the "
         "features the child's benchmark view logged (`ugv_u_star`, `ugv_s_star`, `ugv_k_h`) and the task states "
-        "from the skills' state changes. As in the paper's Fig. 11(b), u* settles near 0.5, s* grows as the "
-        "child closes in and k_h steadies near 0 before the child drives in. Experiment II's interference "
+        "from the skills' state changes. In the paper's Fig. 11(b), u* settles near 0.5 after an overshoot, s* "
+        "grows as the child closes in and k_h fluctuates, then steadies near 0 before the child drives in. "
+        "Experiment II's interference "
         "(Fig. 13: the child moved by hand) is not reproduced.",
         "",
         f"![features and states]({rel['features']})",
