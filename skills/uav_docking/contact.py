@@ -331,7 +331,7 @@ class Contact(Skill["Contact.Params"]):
         speed = float(np.linalg.norm(state.v_M))
         unsteady = self.guard.update(now, lateral if near else 0.0, speed if near else 0.0)
         if unsteady and not was:
-            if self.phase == "capture" and not self.device.contact_switch:
+            if self.phase == "capture":  # the switch is open (above): Part B is not seated
                 self.device.magnet_off()
                 self.phase = "approach"
             self.guard_event("unsteady", why=self.guard.reason, gap_estimate=round(gap, 4))
