@@ -678,6 +678,10 @@ DEPARTURES = [
     "(`vision_fixes: false` in the mission): after 100 s of exploration the UAV's own height estimate is about "
     "0.35 m off, and with fixes on the first docking struck the arm 1 s into tracking (the UAV fell 0.9 m while "
     "its estimate was corrected; not understood yet).",
+    "- **P_Q^M without the UAV's frame corrections** (`relative_pose.py`): each estimate carries the cumulated "
+    "shifts of the vision fixes (`frame_shift`, as PX4 publishes its resets); between camera frames the carrier "
+    "propagates on the UAV's estimate with the shifts made since the skill began taken out, so a fix's correction "
+    "of the UAV's own estimate (20 cm in height at the start of tracking) does not move P_Q^M and the hold.",
     "- **UAV hold in M** (`relative_hold.py`): the paper controls the UAV 'within M coordinates' without a law; ours "
     "feeds forward the carrier's estimated velocity at the target point and feeds back the error in M "
     "(k_p 2.5 /s, ≤ 1 m/s), sent as a body-frame velocity. The UAV holds Part B at (0.20, 0, 0.80) m in M facing the "
