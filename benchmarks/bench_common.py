@@ -125,6 +125,13 @@ def print_tables(sections: Sequence[Section], machine: dict[str, Any]) -> None:
         print(f"machine load average (1, 5, 15 min): {machine['load_average_1_5_15min']}")
 
 
+def print_targets(title: str, labels: Mapping[str, str], checks: Mapping[str, tuple[bool, str]],
+                  machine: dict[str, Any]) -> None:
+    """Print a benchmark's targets: each one's label (``labels`` by key), what was measured and whether it was met."""
+    rows = [(labels[k], measured, "yes" if ok else "NO") for k, (ok, measured) in checks.items()]
+    print_tables([(title, ("target", "measured", "met"), rows)], machine)
+
+
 def write_report(report: dict[str, Any], out: Path) -> None:
     """Write ``report`` as indented JSON to ``out`` (folders made as needed) and say where."""
     out.parent.mkdir(parents=True, exist_ok=True)

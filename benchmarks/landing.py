@@ -74,7 +74,7 @@ from bench_common import (  # the module next to this script
     campaign,
     campaign_arguments,
     machine_info,
-    print_tables,
+    print_targets,
     write_report,
 )
 
@@ -844,8 +844,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         report(results, images, args.report, cycles)
         checks = verdicts(results, cycles)
         results["targets"] = {k: {"met": ok, "measured": m} for k, (ok, m) in checks.items()}
-    print_tables([("landing targets", ("target", "measured", "met"),
-                   [(TARGETS[k], m, "yes" if ok else "NO") for k, (ok, m) in checks.items()])], results["machine"])
+    print_targets("landing targets", TARGETS, checks, results["machine"])
     print(f"report: {args.report}")
     write_report(results, args.out)
     return results

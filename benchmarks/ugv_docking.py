@@ -53,7 +53,7 @@ from typing import Any
 import cv2
 import numpy as np
 import ugv_features  # the feature-extraction benchmark next to this script
-from bench_common import campaign, campaign_arguments, machine_info, print_tables, write_report
+from bench_common import campaign, campaign_arguments, machine_info, print_targets, write_report
 
 from marsupial.trees.campaign import wilson_interval
 from marsupial.trees.replay import RunLog, read_log
@@ -622,8 +622,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         report(results, images, args.report)
         checks = verdicts(results)
         results["targets"] = {k: {"met": ok, "measured": m} for k, (ok, m) in checks.items()}
-    print_tables([("ugv docking targets", ("target", "measured", "met"),
-                   [(TARGETS[k], m, "yes" if ok else "NO") for k, (ok, m) in checks.items()])], results["machine"])
+    print_targets("ugv docking targets", TARGETS, checks, results["machine"])
     print(f"report: {args.report}")
     write_report(results, args.out)
     return results
