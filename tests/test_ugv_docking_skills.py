@@ -137,9 +137,12 @@ def test_coordinated_docking_ends_with_the_child_lifted_inside_the_capsule(tmp_p
     outcomes = {e["node"]: e["status"] for e in log.events_of("outcome")}
     assert outcomes["child directed"] == outcomes["lifting"] == outcomes["carrying"] == "SUCCESS"
     # the features as the child saw them (Fig. 11b): s* grows as it approaches, u* ends near 0.5
-    _, s_star = log.metric("ugv_s_star", robot="child")
+    t_features, s_star = log.metric("ugv_s_star", robot="child")
     _, u_star = log.metric("ugv_u_star", robot="child")
     assert s_star[-1] > 1.5 * s_star[0] and abs(u_star[-1] - 0.5) < 0.02
+    # directed, the child still sends its features: the mother's C3 does not hang on one frame crossing the link
+    directed_at = next(e["t"] for e in log.events_of("state_change") if e["node"] == "child directed")
+    assert any(t > directed_at for t in t_features)
     _assert_stored(log)
     _, p_mother = log.poses("mother")
     assert np.linalg.norm(p_mother[-1][:2] - p_mother[0][:2]) > 0.4  # carried away

@@ -13,7 +13,7 @@ wheel odometry; the transitions between them are the conditions C1–C4 of
   runs until the tree moves on (C2) or falls back to linking (C4);
 - ``child_match`` — advance and rotate alternately (:func:`~.steering.match_command`)
   until eq. (7) holds (C3, the tree ends it);
-- ``child_direct`` — drive straight in, holding the heading on odometry,
+- ``child_direct`` — drive straight in, holding the heading on odometry (its features still sent),
   until the mother reports its platform's load switch pressed over the team
   link, then on a little to stand inside the capsule; succeed stopped.
 
@@ -154,8 +154,13 @@ class ChildMatch(_ChildSkill["ChildMatch.Params"]):
         return Status.RUNNING
 
 
-class ChildDirect(Skill["ChildDirect.Params"]):
-    """Directed: drive straight in until the mother reports the child on its platform, then on into the capsule."""
+class ChildDirect(_ChildSkill["ChildDirect.Params"]):
+    """Directed: drive straight in until the mother reports the child on its platform, then on into the capsule.
+
+    The child keeps processing its camera's frames while it drives in, so its features keep going to the
+    mother (§2): the mother leaves aligning on the first of them that meets eq. (7) (C3), which a single
+    frame lost on the link would otherwise withhold from it for good.
+    """
 
     class Params(NodeParams):
         mother: Annotated[str, TeamMember(HasLift)] = "mother"
@@ -169,9 +174,6 @@ class ChildDirect(Skill["ChildDirect.Params"]):
         max_distance: float = Field(0.8, gt=0.0)
         """Fail when driven this far (m, odometry) without the mother reporting the child on the platform."""
 
-    robot_kinds = (HasBase,)
-    claims = ("base",)
-
     def start(self) -> None:
         estimate = self.robot.estimate()
         self.p0, self.yaw0 = np.array(estimate.position[:2]), float(estimate.yaw)
@@ -180,6 +182,7 @@ class ChildDirect(Skill["ChildDirect.Params"]):
 
     def step(self) -> Status:
         p = self.params
+        self.view()  # the features still go to the mother
         estimate = self.robot.estimate()
         position = np.array(estimate.position[:2])
         if self.boarded_at is None and self.platform_occupied():

@@ -10,7 +10,8 @@ the mission's tree (``missions/subtrees/ugv_dock.yaml``):
   child's features arrive (C1 as the child reports it), then succeed;
 - ``mother_align`` — rotate by Remark 1 on the received k_h
   (:func:`~.steering.align_rate`) so the entrance turns towards the child;
-  holds still while no fresh features arrive; runs until the tree moves on (C3);
+  holds still while no fresh features arrive; runs until the tree moves on (C3), or
+  succeeds when its load switch is pressed (the child drove in on a match whose frames the link lost);
 - ``mother_direct`` — hold still while the child drives in, reporting the
   platform (:class:`~.vision.PlatformReport`) over the link; succeed once the
   load switch has stayed pressed for ``settle`` seconds (the child stopped on it).
@@ -66,7 +67,11 @@ class MotherLink(_MotherSkill["MotherLink.Params"]):
 
 
 class MotherAlign(_MotherSkill["MotherAlign.Params"]):
-    """Aligning: rotate by Remark 1 on the child's transmitted k_h so the entrance faces the child (until C3)."""
+    """Aligning: rotate by Remark 1 on the child's transmitted k_h so the entrance faces the child (until C3).
+
+    Succeeds, stopped, if the platform's load switch is pressed first: the child matched and drove in, but
+    every frame showing the match was lost on the team link.
+    """
 
     class Params(NodeParams):
         child: ChildMember = "child"
@@ -80,6 +85,11 @@ class MotherAlign(_MotherSkill["MotherAlign.Params"]):
 
     def step(self) -> Status:
         p = self.params
+        if self.robot.platform_occupied:
+            # the child drove in on a match (C3) whose frames all missed the link: the load switch tells
+            self.robot.stop()
+            self.feedback_message = "child on the platform before its match arrived: aligned"
+            return Status.SUCCESS
         features = received_features(self, p.child, p.max_age)
         if features is None:
             self.robot.stop()
