@@ -15,6 +15,7 @@ does where the robot really arrives. Speeds m/s, times simulated s
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import ClassVar, Literal
 
 import numpy as np
@@ -128,14 +129,24 @@ class DriveTo(Skill["DriveTo.Params"]):
 
     def step(self) -> Status:
         estimate = self.robot.estimate()
-        p = estimate.position
-        dx, dy = self.params.target[0] - p[0], self.params.target[1] - p[1]
-        distance = math.hypot(dx, dy)
+        p = self.params
+        distance = math.dist(p.target, estimate.position[:2])
         self.feedback_message = f"{distance:.2f} m to go"
-        if distance <= self.params.tolerance:
+        if distance <= p.tolerance:
             return Status.SUCCESS
-        heading_error = math.remainder(math.atan2(dy, dx) - estimate.yaw, math.tau)
-        omega = max(-self.params.turn_rate, min(self.params.turn_rate, self.params.heading_gain * heading_error))
-        v = min(self.params.speed, distance) * max(0.0, math.cos(heading_error))
-        self.robot.drive(v, omega)
+        self.robot.drive(*unicycle_command(estimate.position[:2], estimate.yaw, p.target, p.speed, p.turn_rate,
+                                           p.heading_gain))
         return Status.RUNNING
+
+
+def unicycle_command(position: Sequence[float], yaw: float, target: Sequence[float], speed: float, turn_rate: float,
+                     heading_gain: float) -> tuple[float, float]:
+    """``(v, omega)`` (m/s, rad/s) driving a ground robot at ``position`` (m), heading ``yaw`` (rad), to ``target``.
+
+    Turns towards the target at ``heading_gain`` × the heading error (limited to ``turn_rate``) and drives at
+    ``min(speed, distance)`` scaled by the error's cosine (nothing while facing away). Same frame for both points.
+    """
+    dx, dy = target[0] - position[0], target[1] - position[1]
+    heading_error = math.remainder(math.atan2(dy, dx) - yaw, math.tau)
+    omega = max(-turn_rate, min(turn_rate, heading_gain * heading_error))
+    return min(speed, math.hypot(dx, dy)) * max(0.0, math.cos(heading_error)), omega

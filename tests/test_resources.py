@@ -135,6 +135,7 @@ CASES = {
     "child_approach": ("yard_facing", "child", {}),
     "child_match": ("yard_facing", "child", {}),
     "child_direct": ("yard_facing", "child", {}),
+    "child_reposition": ("yard_facing", "child", {}),
     "mother_link": ("yard_away", "mother", {}),
     "mother_align": ("yard_facing", "mother", {}),
     "mother_direct": ("yard_facing", "mother", {}),

@@ -189,6 +189,25 @@ def test_a_kidnapped_child_falls_back_through_c4_relinks_and_docks(tmp_path):
     _assert_stored(log, int(np.searchsorted(log.poses("child")[0], lifted)) - 1)
 
 
+def test_independent_docking_repositions_onto_the_entry_line_then_docks(tmp_path):
+    """Experiment III's baseline: the mother holds still; the child estimates the entry line from its first view."""
+    result = marsupial.run("ugv_docking_independent", log=tmp_path / "independent.mcap")
+    assert result.outcome == "success", result.message
+    log = marsupial.read_log(result.log_path)
+    outcomes = {e["node"]: (e["t"], e["status"]) for e in log.events_of("outcome")}
+    repositioned_at, status = outcomes["child repositioning"]
+    assert status == "SUCCESS" and outcomes["lifting"][1] == "SUCCESS"
+    t, p_child, q_child = log.poses("child", orientation=True)
+    _, p_mother = log.poses("mother")
+    assert np.linalg.norm(p_mother[-1][:2] - p_mother[0][:2]) < 0.01  # static: nothing turned the entrance
+    i = int(np.searchsorted(t, repositioned_at))
+    yaw = math.atan2(*(rotation_matrix(q_child[i])[:, 0])[1::-1])
+    # on the entry line y = 0 (truth), 0.6 m before E (x = -0.45 - 0.6 + the camera's lead), facing in (+x)
+    assert abs(p_child[i][1]) < 0.05 and abs(yaw) < math.radians(8.0)
+    assert -1.15 < p_child[i][0] < -0.85
+    _assert_stored(log)
+
+
 def test_carry_refuses_an_empty_platform_and_release_lowers_it_and_backs_the_child_out():
     with World(scene="marsupial_yard", seed=2) as world:
         mother = world.add_robot("mother_ugv", name="mother", pose=[0.0, 0.0, 0.0])

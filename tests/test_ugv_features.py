@@ -21,7 +21,7 @@ from marsupial.skills.ugv_docking.criterion import (
     within_criterion,
 )
 from marsupial.skills.ugv_docking.features import T_N, BenchmarkFeatures, extract_features
-from marsupial.skills.ugv_docking.geometry import border_point_image, theoretical_slope
+from marsupial.skills.ugv_docking.geometry import border_point_image, entry_angle, ground_point, theoretical_slope
 from marsupial.world import World
 from marsupial.world.robots.ugv_docking import entry_geometry, place_child
 from marsupial.world.ugv_criterion import record_criterion_list
@@ -112,6 +112,30 @@ def test_u_h_is_the_projected_crossing(yard, alpha_deg, x_e, y_e):
     assert features is not None and features.n_g >= T_N
     assert features.u_h == pytest.approx(i_h[0], abs=2.0)
     assert features.v_h == pytest.approx(i_h[1], abs=2.0)
+
+
+def test_eqs_1_4_6_inverted_give_back_the_relative_pose():
+    for alpha, x_e, y_e in [(1.2, 0.1, 0.5), (2.0, -0.2, 0.8), (math.pi / 2, 0.0, 0.3), (0.9, 0.3, 0.4)]:
+        u, v = border_point_image(y_e, alpha, x_e, y_e, H, THETA, 407.0, 407.0, 319.5, 239.5)  # I_h images E
+        x, y = ground_point(u, v, H, THETA, 407.0, 407.0, 319.5, 239.5)
+        k_bar = theoretical_slope(alpha, x_e, y_e, H, THETA, 407.0, 407.0)
+        assert (x, y) == pytest.approx((x_e, y_e), abs=1e-9)
+        assert entry_angle(k_bar, x, y, H, THETA, 407.0, 407.0) == pytest.approx(alpha, abs=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("alpha_deg", "x_e", "y_e"), [(60, 0.1, 0.6), (120, -0.1, 1.0), (55, 0.0, 0.45), (125, 0.05, 1.5)]
+)
+def test_the_relative_pose_from_one_rendered_view(yard, alpha_deg, x_e, y_e):
+    """What the independent child's repositioning estimates: E within 1 cm, α within 2° (noisy frames)."""
+    mother, child = yard
+    place_child(mother, child, math.radians(alpha_deg), x_e, y_e)
+    frame = child.camera.measure()
+    f, K = extract_features(frame.rgb), frame.K
+    assert f is not None
+    x, y = ground_point(f.u_h, f.v_h, H, THETA, K[0, 0], K[1, 1], K[0, 2], K[1, 2])
+    assert (x, y) == pytest.approx((x_e, y_e), abs=0.01)
+    assert math.degrees(entry_angle(f.k_h, x, y, H, THETA, K[0, 0], K[1, 1])) == pytest.approx(alpha_deg, abs=2.0)
 
 
 ALPHAS_DEG = (70, 80, 90, 100, 110)

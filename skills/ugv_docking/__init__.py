@@ -17,6 +17,8 @@ The mission nodes built on them (``docs/ugv_docking.md``):
 - :mod:`.vision` — the child's benchmark view shared by its nodes, and the team-link messages;
 - :mod:`.conditions` — the transitions C1–C4;
 - :mod:`.child` — the child's states: ``child_link``, ``child_approach``, ``child_match``, ``child_direct``;
+- :mod:`.reposition` — ``child_reposition``: the independent docking's drive onto the entry line, estimated
+  from one view by inverting eqs. (1), (4) and (6) (:mod:`.geometry`);
 - :mod:`.mother` — the mother's states: ``mother_link``, ``mother_align``, ``mother_direct``;
 - :mod:`.station` — the lifting station after the docking: ``lift``, ``carry``, ``release``.
 """
