@@ -139,8 +139,8 @@ class DriveTo(Skill["DriveTo.Params"]):
         return Status.RUNNING
 
 
-def unicycle_command(position: Sequence[float], yaw: float, target: Sequence[float], speed: float, turn_rate: float,
-                     heading_gain: float) -> tuple[float, float]:
+def unicycle_command(position: Sequence[float] | np.ndarray, yaw: float, target: Sequence[float] | np.ndarray,
+                     speed: float, turn_rate: float, heading_gain: float) -> tuple[float, float]:
     """``(v, omega)`` (m/s, rad/s) driving a ground robot at ``position`` (m), heading ``yaw`` (rad), to ``target``.
 
     Turns towards the target at ``heading_gain`` × the heading error (limited to ``turn_rate``) and drives at
