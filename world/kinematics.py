@@ -10,7 +10,7 @@ not depend on where the mobile base is. Units: metres, radians.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -152,6 +152,16 @@ class ArmKinematics:
         pin.forwardKinematics(self.model, self.data, self._q(q))
         oMf = pin.updateFramePlacement(self.model, self.data, fid)
         return (self._M_base_root * oMf).homogeneous
+
+    def transforms(self, q: Vector, frames: Sequence[str]) -> list[np.ndarray]:
+        """4×4 transforms ``T_base_frame`` of each of ``frames`` at ``q`` (one forward-kinematics pass)."""
+        ids = [self._frame_id(f) for f in frames]
+        pin.framesForwardKinematics(self.model, self.data, self._q(q))
+        return [(self._M_base_root * self.data.oMf[i]).homogeneous for i in ids]
+
+    def moved_by(self, frame: str) -> int:
+        """The arm joint (1 = the first from the base; 0 = none) whose motion moves ``frame`` directly."""
+        return int(self.model.frames[self._frame_id(frame)].parentJoint)
 
     def jacobian(self, q: Vector, frame: str | None = None) -> np.ndarray:
         """6×n Jacobian of ``frame`` (default: the tip) at ``q``.

@@ -106,6 +106,15 @@ class VolumetricMap:
         """Occupancy log-odds at ``points`` ``(n, 3)`` (m); NaN where unknown."""
         return tree_log_odds(self.tree, points)
 
+    def occupied_boxes(self) -> tuple[np.ndarray, np.ndarray]:
+        """Centres ``(n, 3)`` (m) and edge lengths ``(n,)`` (m) of the occupied leaves (pruned leaves are larger)."""
+        centres, sizes = [], []
+        for leaf in self.tree.begin_leafs():
+            if self.tree.isNodeOccupied(leaf):
+                centres.append(leaf.getCoordinate())
+                sizes.append(leaf.getSize())
+        return np.array(centres, dtype=float).reshape(-1, 3), np.array(sizes, dtype=float)
+
     def state(self, points: np.ndarray) -> np.ndarray:
         """:data:`UNKNOWN`, :data:`FREE` or :data:`OCCUPIED` for each of ``points`` ``(n, 3)`` (m)."""
         lo = self.log_odds(points)

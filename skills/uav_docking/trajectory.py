@@ -98,16 +98,8 @@ def plan_joint_trajectory(
     delta = q_goal - q_start
     if np.max(np.abs(delta)) < 1e-9:
         return JointTrajectory(q_start, q_goal, None)
-    dof = q_start.size
-    v, a = params.margin * params.v_max, params.margin * params.a_max
-    path = toppra.SplineInterpolator([0.0, 1.0], np.vstack((q_start, q_goal)))  # q(s) = q_start + s·Δq
-    constraints = [
-        toppra.constraint.JointVelocityConstraint(np.column_stack((np.full(dof, -v), np.full(dof, v)))),
-        toppra.constraint.JointAccelerationConstraint(np.column_stack((np.full(dof, -a), np.full(dof, a)))),
-    ]
-    instance = toppra.algorithm.TOPPRA(
-        constraints, path, gridpoints=np.linspace(0.0, 1.0, params.gridpoints), parametrizer="ParametrizeConstAccel"
-    )
+    v = params.margin * params.v_max
+    instance = _toppra(toppra.SplineInterpolator([0.0, 1.0], np.vstack((q_start, q_goal))), q_start.size, params)
     sd_start = 0.0
     if qd_start is not None:  # ṡ of the present speed along Δq, within the speed limit
         sd_start = float(np.clip(np.dot(qd_start, delta) / np.dot(delta, delta), 0.0, v / np.max(np.abs(delta))))
@@ -119,3 +111,38 @@ def plan_joint_trajectory(
     if timed is None:
         raise RuntimeError(f"toppra found no parameterisation from {q_start} to {q_goal}")
     return JointTrajectory(q_start, q_goal, timed)
+
+
+def _toppra(path: toppra.interpolator.AbstractGeometricPath, dof: int, params: TrajectoryParams
+            ) -> toppra.algorithm.TOPPRA:
+    """TOPP-RA over ``path`` (s ∈ [0, 1]) under the joint speed and acceleration limits of ``params``."""
+    v, a = params.margin * params.v_max, params.margin * params.a_max
+    constraints = [
+        toppra.constraint.JointVelocityConstraint(np.column_stack((np.full(dof, -v), np.full(dof, v)))),
+        toppra.constraint.JointAccelerationConstraint(np.column_stack((np.full(dof, -a), np.full(dof, a)))),
+    ]
+    return toppra.algorithm.TOPPRA(
+        constraints, path, gridpoints=np.linspace(0.0, 1.0, params.gridpoints), parametrizer="ParametrizeConstAccel"
+    )
+
+
+def time_joint_path(waypoints: np.ndarray, params: TrajectoryParams = TrajectoryParams()) -> JointTrajectory:
+    """The time-optimal motion from rest to rest through ``waypoints`` ``(n, dof)`` (rad), under ``params``' limits.
+
+    The path is the cubic spline through the waypoints over their cumulated joint-space length (s ∈ [0, 1]);
+    densely spaced waypoints (a planner's path interpolated at its collision-check resolution) keep the
+    spline within a small fraction of a spacing of the checked polyline.
+    """
+    waypoints = np.asarray(waypoints, dtype=float)
+    if waypoints.ndim != 2 or waypoints.shape[0] < 2:
+        raise ValueError(f"expected (n >= 2, dof) waypoints, got shape {waypoints.shape}")
+    steps = np.linalg.norm(np.diff(waypoints, axis=0), axis=1)
+    keep = np.concatenate(([True], steps > 1e-9))
+    waypoints, s = waypoints[keep], np.concatenate(([0.0], np.cumsum(steps[steps > 1e-9])))
+    if waypoints.shape[0] < 2:
+        return JointTrajectory(waypoints[0], waypoints[0], None)
+    timed = _toppra(toppra.SplineInterpolator(s / s[-1], waypoints), waypoints.shape[1], params).compute_trajectory(
+        0.0, 0.0)
+    if timed is None:
+        raise RuntimeError(f"toppra found no parameterisation through {waypoints.shape[0]} waypoints")
+    return JointTrajectory(waypoints[0], waypoints[-1], timed)
