@@ -1,4 +1,5 @@
-"""``approach_aperture`` in ``collapsed_mockup``: after ``aperture_scan`` the MMS drives to a placement and looks.
+"""``approach_aperture`` and ``analyze_aperture`` in ``collapsed_mockup``: after ``aperture_scan`` the MMS drives to a
+placement, looks, and plans the launches through the aperture it ranked first.
 
 The skill decides from the onboard interface only; the test scores on
 truth: the base stands where the placement says, and the camera's true pose
@@ -13,6 +14,7 @@ from py_trees.common import Status
 from skill_harness import Harness
 
 from marsupial.geometry import rotation_matrix, yaw_of
+from marsupial.skills.aperture.analyze import LAUNCH_PLANS, AnalyzeAperture
 from marsupial.skills.aperture.approach import PLACEMENT, ApproachAperture
 from marsupial.skills.aperture.placement import CameraModel, in_view
 from marsupial.skills.aperture.scan import APERTURES, ApertureScan
@@ -21,13 +23,14 @@ from marsupial.world.robots.mms import CAMERA_INTRINSICS
 from marsupial.world.sensors.camera import OPTICAL_FORWARD
 
 
-def test_the_mms_reaches_a_placement_from_which_its_camera_sees_the_best_aperture():
+def test_the_mms_reaches_a_placement_from_which_its_camera_sees_the_best_aperture_and_plans_launches():
     with World(scene="collapsed_mockup", seed=3) as world:
         mms = world.add_robot("mms", "mms", pose=[0.3, -2.4, 1.5708])
         harness = Harness(world)
         scan, approach = harness.node(ApertureScan, "mms"), harness.node(ApproachAperture, "mms")
-        root = py_trees.composites.Sequence("scan_then_approach", memory=True, children=[scan, approach])
-        assert harness.run(root, 120.0) == Status.SUCCESS, approach.feedback_message
+        analyze = harness.node(AnalyzeAperture, "mms")
+        root = py_trees.composites.Sequence("scan_approach_analyze", memory=True, children=[scan, approach, analyze])
+        assert harness.run(root, 130.0) == Status.SUCCESS, (approach.feedback_message, analyze.feedback_message)
         placement = approach.read(f"mms/{PLACEMENT}")
         best = scan.read(f"mms/{APERTURES}")[0]
         p_true, q_true = mms.pose()
@@ -42,3 +45,9 @@ def test_the_mms_reaches_a_placement_from_which_its_camera_sees_the_best_apertur
         R_optical = rotation_matrix(q_link) @ OPTICAL_FORWARD
         assert in_view(camera, np.asarray(p_link), R_optical, np.asarray(zone.center), margin_px=40.0)
         assert 0.3 < np.linalg.norm(np.asarray(p_link) - zone.center) < 0.7  # the stand-off (0.5 m)
+        plans = analyze.read(f"mms/{LAUNCH_PLANS}")
+        assert plans and all(plan.feasible for plan in plans)
+        for plan in plans[:5]:  # ξ_MAV on the true aperture's plane, within it; g d_l out along n̂
+            assert np.linalg.norm(plan.pre_launch - np.asarray(zone.center)) < 0.12
+            assert np.dot(plan.normal, (0.0, -1.0, 0.0)) > 0.95  # the mockup's wall: y = 0, the MMS on its -y side
+            assert np.linalg.norm(plan.goal - plan.pre_launch) > 0.1

@@ -143,6 +143,7 @@ CASES = {
     "carry": ("yard_stored", "mother", {"target": (1.0, 0.0)}),
     "release": ("yard_stored", "mother", {}),
     "approach_aperture": ("mms", "mms", {}),
+    "analyze_aperture": ("mms", "mms", {}),
 }
 
 
