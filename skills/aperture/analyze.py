@@ -12,8 +12,7 @@ kept when the launch attitude is within α_launch.
 
 What it senses: the camera's depth frames posed by the arm encoders, the arm
 model and the base estimate (:func:`~.scan.fresh_frame`), and the ranking
-``aperture_scan`` wrote. It commands nothing (the arm holds the approach's
-pose).
+``aperture_scan`` wrote. It holds the arm where the approach left it.
 
 Blackboard: reads ``{robot}/apertures``; writes ``{robot}/launch_plans``, the
 feasible :class:`~.launch_pose.LaunchPlan` list, best first. Events: a
@@ -58,11 +57,12 @@ class AnalyzeAperture(Skill["AnalyzeAperture.Params"]):
 
     robot_kinds = (HasArmModel,)
     sensors = ("camera",)
-    claims = ()  # it commands nothing: the arm holds the approach's pose
+    claims = ("arm",)  # held still at the approach's viewing pose while the frames are taken
     reads = (f"{{robot}}/{APERTURES}",)
     writes = (f"{{robot}}/{LAUNCH_PLANS}",)
 
     def start(self) -> None:
+        self.robot.hold_arm()
         self.frames: list[DepthFrame] = []
         self.last_stamp = self.now  # frames taken from now on: the arm stands at the approach's pose
 
