@@ -5,7 +5,7 @@ entrance towards the child: the child must come onto the entry line itself.
 Seen obliquely the benchmark is lost long before eq. (7) can hold (the 8-px
 checks of §3.1 fail at |k_h| ≳ 0.5), so steering onto the line by k_h while
 matching stalls (the child keeps losing and relinking the benchmark). This
-skill instead estimates the entry line once from the features it holds —
+skill instead estimates the entry line once from one view —
 E = (x_e, y_e) from (u_h, v_h) by eqs. (1) and (4), α from k_h by eq. (6)
 (:mod:`.geometry`), with the camera's own intrinsics and its mount (θ, h of
 Table 1), in a frame taken at rest — and drives blind on wheel odometry to a point of the line
@@ -32,9 +32,10 @@ from .child import _ChildSkill
 from .conditions import LOST_FRAMES
 from .features import BenchmarkFeatures
 from .geometry import entry_angle, ground_point
+from .precision import PrecisionParams
 
-CAMERA_TILT = math.radians(15.0)  # θ, Table 1: the child_ugv's camera mount
-BORDER_HEIGHT = 0.23  # h (m), Table 1: H_GS above the camera
+CAMERA_TILT = PrecisionParams().theta  # θ, Table 1: the child_ugv's camera mount (rad)
+BORDER_HEIGHT = PrecisionParams().h  # h, Table 1: H_GS above the camera (m)
 
 
 def entry_waypoint(features: BenchmarkFeatures, K: np.ndarray, position: np.ndarray, yaw: float,
