@@ -27,7 +27,12 @@ logged true poses (``/truth/<robot>/pose``).
    per grade (the run succeeds and the child's true pose ends lifted) with
    Wilson 95 % intervals. Target: ≥ 29/30 per grade at default sensing (the
    paper's minimum was 26/30).
-3. Feature extraction time per 640×480 frame: ``benchmarks/ugv_features.py``'s
+3. Experiment II (§4.2, Fig. 13) — one coordinated run from the mission's start with the child kidnapped
+   8 s in (the ``kidnap`` disturbance), its features and task states plotted with the C4 fallback.
+4. Precision at the entrance (§3.4) — the analysis's bounds |Δx_e|, |Δα| (Table 1, and with Δk = 0.01, the
+   paper's printed figures) beside the child's true offsets from the entry line as ``child_direct`` began,
+   over the coordinated Experiment III and default-sensing repeatability runs.
+5. Feature extraction time per 640×480 frame: ``benchmarks/ugv_features.py``'s
    measurement (target ≤ 2 ms on one core).
 
 ``--quick``: 3 locations × 1 trial per approach, and the grades 0.5 m and
@@ -55,6 +60,8 @@ import numpy as np
 import ugv_features  # the feature-extraction benchmark next to this script
 from bench_common import campaign, campaign_arguments, machine_info, print_targets, write_report
 
+from marsupial.geometry import yaw_of
+from marsupial.skills.ugv_docking.precision import PrecisionParams, analyse
 from marsupial.trees.campaign import wilson_interval
 from marsupial.trees.replay import RunLog, read_log
 
@@ -74,6 +81,8 @@ GRADES_M = (0.5, 0.8, 1.1, 1.4, 1.7, 2.0, 2.3, 2.6)
 QUICK_GRADES_M = (0.5, 2.6)
 GRADE_BEARING = math.radians(90.0)
 NOISE_2 = {"world.sensing.noise_scale": "2"}
+#: Experiment II: the child moved 8 s in (approaching) to position B, its back to the benchmark (as the test's)
+KIDNAP = "{kidnap: [{robot: child, at: 8.0, pose: [-1.4, 0.2, 2.77]}]}"
 LIFTED_M = 0.2  # the child's true height gain (m) that says it was lifted into the capsule (travel 0.30 m)
 PAPER_MIN_SUCCESS = (26, 30)
 TARGET_SUCCESS = (29, 30)
@@ -137,6 +146,27 @@ class RunStats:
     sim_time_s: float
     wall_time_s: float
     why: str  # of a failed run: the last failing skill and its message (empty on success)
+    entrance: tuple[float, float] | None = None  # (lateral m, heading rad) off the entry line as directing began
+
+
+def entrance_offset(log: RunLog) -> tuple[float, float] | None:
+    """The child's true offset from the entry line when ``child_direct`` started (§3.4's final stage).
+
+    Lateral: the child's position across the mother's axis (m, the station is centred on it); heading: the
+    child's yaw less the mother's (rad). ``None`` if the child was never directed.
+    """
+    started = next((e["t"] for e in log.events_of("state_change")
+                    if e.get("skill") == "child_direct" and e.get("status") == "RUNNING"), None)
+    if started is None:
+        return None
+    samples = {}
+    for robot in ("child", "mother"):
+        t, xyz, quat = log.poses(robot, orientation=True)
+        i = min(int(np.searchsorted(t, started)), len(t) - 1)
+        samples[robot] = (xyz[i], yaw_of(quat[i]))
+    (p_c, yaw_c), (p_m, yaw_m) = samples["child"], samples["mother"]
+    across = np.array([-math.sin(yaw_m), math.cos(yaw_m)])
+    return float(across @ (p_c[:2] - p_m[:2])), math.remainder(yaw_c - yaw_m, math.tau)
 
 
 def first_success(log: RunLog, skill: str) -> float | None:
@@ -161,7 +191,8 @@ def run_stats(record: dict[str, Any]) -> RunStats:
         mother = [e["skill"] for e in log.events_of("state_change") if e.get("skill") in MOTHER_STATES]
         why += f" (the mother's last task state: {mother[-1] if mother else 'none'})"
     return RunStats(record["log"], record["params"].get("team.child.pose", ""), log.outcome or "?", success,
-                    docked, lifted, path if docked is not None else None, log.sim_time or 0.0, record["wall_time"], why)
+                    docked, lifted, path if docked is not None else None, log.sim_time or 0.0, record["wall_time"], why,
+                    entrance_offset(log))
 
 
 def records_of(out: Path) -> list[dict[str, Any]]:
@@ -228,8 +259,42 @@ def repeatability(runs: Path, grades: tuple[float, ...], trials: int, workers: i
             "failed_starts": [f"{s.pose} ({s.why})" for s in stats if not s.success],
             "wall_time_s": sum(s.wall_time_s for s in stats),
             "mean_time_s": _mean([s.docked_s for s in stats if s.success]),
+            "entrance": [s.entrance for s in stats if s.entrance is not None],
         }
     return rows
+
+
+def precision(results: dict[str, Any]) -> dict[str, Any]:
+    """§3.4's bounds (Table 1, and with Δk = 0.01) beside the measured offsets at the entrance, coordinated runs.
+
+    Measured: |lateral| (m) and |heading| (rad) off the entry line as ``child_direct`` began, over the coordinated
+    Experiment III runs and the default-sensing repeatability runs: median, 95th percentile and maximum.
+    """
+    offsets = [tuple(r["entrance"]) for r in results["exp3"]["approaches"]["coordinated"]["runs"]
+               if r["entrance"] is not None]
+    offsets += [tuple(o) for row in results["repeatability"]["default"].values() for o in row["entrance"]]
+    table_1, paper = analyse(), analyse(PrecisionParams(delta_k=0.01))
+    measured: dict[str, Any] = {"runs": len(offsets)}
+    if offsets:
+        lateral, heading = np.abs(np.array(offsets)).T
+        for name, values in (("lateral_m", lateral), ("heading_rad", heading)):
+            measured[name] = {"median": float(np.median(values)), "p95": float(np.percentile(values, 95)),
+                              "max": float(values.max())}
+        measured["within_bounds"] = int(np.sum((lateral < table_1.delta_x_e) & (heading < table_1.delta_alpha)))
+    return {"table_1": asdict(table_1), "delta_k_0.01": asdict(paper), "measured": measured,
+            "margin_m": (PrecisionParams().b_e - PrecisionParams().b_c) / 2.0}
+
+
+def kidnap_run(runs: Path, workers: int) -> dict[str, Any]:
+    """Experiment II (Fig. 13): the default coordinated start, the child kidnapped while approaching."""
+    out = runs / "exp2_kidnap"
+    campaign(COORDINATED, 1, out, overrides={"world.disturbances": KIDNAP}, workers=workers)
+    (record,) = records_of(out)
+    stats = run_stats(record)
+    log = read_log(record["log"])
+    fallbacks = [e["t"] for e in log.events_of("preemption") if str(e.get("why", "")).startswith("features_lost")]
+    return {"log": record["log"], "pose": "the mission's start", "success": stats.success,
+            "docked_s": stats.docked_s, "c4_at": fallbacks}
 
 
 def feature_speed(quick: bool) -> dict[str, Any]:
@@ -314,13 +379,13 @@ def _save(fig: Any, img: Path, name: str) -> str:
     return str(path)
 
 
-def plot_features(run: dict[str, Any], img: Path) -> str:
+def plot_features(run: dict[str, Any], img: Path, name: str = "features", what: str = "coordinated run") -> str:
     """Figs. 11(b)/13(b) and 14: the child's logged features and both robots' task states over one run."""
     plt = _pyplot()
     log = read_log(run["log"])
     fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
-    for name, label in (("ugv_u_star", "u* = u_h / W"), ("ugv_s_star", "s* = s_u / W")):
-        axes[0].plot(*log.metric(name, robot="child"), ".", ms=3, label=label)
+    for metric, label in (("ugv_u_star", "u* = u_h / W"), ("ugv_s_star", "s* = s_u / W")):
+        axes[0].plot(*log.metric(metric, robot="child"), ".", ms=3, label=label)
     axes[0].axhline(0.5, color="grey", lw=0.6)
     axes[0].legend()
     axes[0].set_ylabel("normalised feature")
@@ -333,8 +398,11 @@ def plot_features(run: dict[str, Any], img: Path) -> str:
     axes[2].set_ylabel("task state")
     axes[2].set_xlabel("t (s)")
     axes[2].legend()
-    fig.suptitle(f"coordinated run from {run['pose']}: features (Figs. 11b, 13b) and task states (Fig. 14)")
-    return _save(fig, img, "features")
+    for t in run.get("c4_at", []):
+        for ax in axes:
+            ax.axvline(t, color="red", lw=0.8, ls=":")
+    fig.suptitle(f"{what} from {run['pose']}: features (Figs. 11b, 13b) and task states (Fig. 14)")
+    return _save(fig, img, name)
 
 
 def plot_paths(exp3: dict[str, Any], img: Path) -> str:
@@ -415,6 +483,7 @@ def plots(results: dict[str, Any], img: Path) -> dict[str, str]:
     results["example_run"] = {"log": example["log"], "pose": example["pose"]}
     return {
         "features": plot_features(example, img),
+        "kidnap": plot_features(results["exp2"], img, "kidnap", "Experiment II, the child kidnapped at 8 s,"),
         "paths": plot_paths(exp3, img),
         "exp3": plot_exp3(exp3, img),
         "repeatability": plot_repeatability(results["repeatability"], img),
@@ -444,6 +513,38 @@ def what_was_run(results: dict[str, Any]) -> list[str]:
         "figure below is from the runs listed, none is extrapolated; with 3 trials a Wilson interval is wide and "
         "a grade's 3/3 says little about 29/30.",
     ])
+
+
+def precision_lines(p: dict[str, Any]) -> list[str]:
+    """The report's §3.4 section: the analysis's bounds beside the offsets measured at the entrance."""
+    m, t1, pk = p["measured"], p["table_1"], p["delta_k_0.01"]
+    lines = [
+        "## Precision at the entrance (§3.4)",
+        "",
+        "The analysis bounds the child's offsets when it is directed in (eq. 7 met): the width deviation "
+        "|Δx_e| by eq. (12) and the entry-direction offset |Δα| by eq. (16). Eq. (8) then says it clears the "
+        f"entrance ({p['margin_m'] * 100:.0f} cm to spare each side). Measured on truth as `child_direct` began, "
+        f"over {m['runs']} coordinated runs (Experiment III and the default-sensing repeatability runs): the "
+        "child's lateral offset from the station's axis, and its heading less the mother's.",
+        "",
+        "| | analysis, Table 1 (Δk = 0.02) | analysis, Δk = 0.01 (the paper's printed figures) "
+        "| measured median / p95 / max |",
+        "|---|---|---|---|",
+    ]
+    if m["runs"]:
+        lat, head = m["lateral_m"], m["heading_rad"]
+        lines += [
+            f"| \\|Δx_e\\| (cm) | < {100 * t1['delta_x_e']:.3f} | < {100 * pk['delta_x_e']:.3f} (paper 0.817) "
+            f"| {100 * lat['median']:.2f} / {100 * lat['p95']:.2f} / {100 * lat['max']:.2f} |",
+            f"| \\|Δα\\| (°) | < {math.degrees(t1['delta_alpha']):.3f} | < {math.degrees(pk['delta_alpha']):.3f} "
+            f"(paper 0.96) | {math.degrees(head['median']):.2f} / {math.degrees(head['p95']):.2f} / "
+            f"{math.degrees(head['max']):.2f} |",
+            "",
+            f"{m['within_bounds']} of {m['runs']} runs were within both Table 1 bounds as they were directed in. "
+            "The bounds are on the feature errors' 3σ only. The measured offsets also hold what the child's "
+            "servoing leaves within eq. (7)'s tolerances: Δu = 5 px at the entrance is ≈ 0.3 cm.",
+        ]
+    return lines
 
 
 def report(results: dict[str, Any], images: dict[str, str], path: Path) -> None:
@@ -540,11 +641,23 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path) -> None:
         f"From `{results['example_run']['pose']}` (the first docked coordinated Experiment III run): the "
         "features the child's benchmark view logged (`ugv_u_star`, `ugv_s_star`, `ugv_k_h`) and the task states "
         "from the skills' state changes. In the paper's Fig. 11(b), u* settles near 0.5 after an overshoot, s* "
-        "grows as the child closes in and k_h fluctuates, then steadies near 0 before the child drives in. "
-        "Experiment II's interference "
-        "(Fig. 13: the child moved by hand) is not reproduced.",
+        "grows as the child closes in and k_h fluctuates, then steadies near 0 before the child drives in.",
         "",
         f"![features and states]({rel['features']})",
+        "",
+        "## Experiment II: the kidnapped child (Fig. 13)",
+        "",
+        "The default coordinated start; 8 s in, while approaching, the `kidnap` disturbance moves the child to "
+        "(−1.4, 0.2) m, its back to the benchmark (the paper's child was carried by hand to position B). "
+        f"C4 (features lost) held at {', '.join(f'{t:.1f} s' for t in results['exp2']['c4_at']) or 'no time'} "
+        "(dotted); the child "
+        + ("relinked and docked at " + _s(results["exp2"]["docked_s"]) if results["exp2"]["success"]
+           else "did **not** dock") + ". The paper: the child \"does not change its approaching state "
+        "immediately\", falls back to linking, and docks.",
+        "",
+        f"![kidnap]({rel['kidnap']})",
+        "",
+        *precision_lines(results["precision"]),
         "",
         "## Feature extraction time (§3.1)",
         "",
@@ -569,6 +682,12 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path) -> None:
         "- The docking time ends with the child on the platform; the lift (6 s) and the carry are left out.",
         "- The child's camera runs at 5 Hz in both missions (for speed, docs/ugv_docking.md); the paper gives "
         "no rate.",
+        "- The independent docking's law is ours (the paper describes none): the child estimates the entry "
+        "line from its first view of the benchmark by inverting eqs. (1), (4) and (6) with its camera's "
+        "intrinsics, drives onto it on odometry, then matches. Steering onto the line by k_h alone stalled "
+        "from oblique starts. It is a strong baseline: it calibrates, which the coordinated docking does not.",
+        "- The directed child keeps sending its features, and the mother's aligning also ends on its load "
+        "switch, so that a match lost on the team link does not hang the mother (docs/ugv_docking.md).",
         "",
         "## Reproducing",
         "",
@@ -614,6 +733,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         if not args.quick:
             results["repeatability"]["noise_2"] = repeatability(runs, grades, trials, args.workers, NOISE_2,
                                                                 "noise_2")
+        results["exp2"] = kidnap_run(runs, args.workers)
+        results["precision"] = precision(results)
         results["features"] = feature_speed(args.quick)
         images = plots(results, args.report.parent / "img")
         results["benchmark_wall_time_s"] = time.perf_counter() - started  # this invocation (runs read back are free)
