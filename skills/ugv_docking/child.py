@@ -157,9 +157,10 @@ class ChildMatch(_ChildSkill["ChildMatch.Params"]):
 class ChildDirect(_ChildSkill["ChildDirect.Params"]):
     """Directed: drive straight in until the mother reports the child on its platform, then on into the capsule.
 
-    The child keeps processing its camera's frames while it drives in, so its features keep going to the
-    mother (§2): the mother leaves aligning on the first of them that meets eq. (7) (C3), which a single
-    frame lost on the link would otherwise withhold from it for good.
+    The child keeps processing its camera's frames while it drives in, until the benchmark has left the
+    image (for ``LOST_FRAMES`` frames, 2–3 cm on), so its features keep going to the mother (§2): the mother
+    leaves aligning on the first of them that meets eq. (7) (C3), which a single frame lost on the link would
+    otherwise withhold from it. The frames after that would show nothing and are not rendered.
     """
 
     class Params(NodeParams):
@@ -179,10 +180,12 @@ class ChildDirect(_ChildSkill["ChildDirect.Params"]):
         self.p0, self.yaw0 = np.array(estimate.position[:2]), float(estimate.yaw)
         self.started = self.now
         self.boarded_at: np.ndarray | None = None
+        self.sending = True
 
     def step(self) -> Status:
         p = self.params
-        self.view()  # the features still go to the mother
+        if self.sending:  # the features still go to the mother, until the benchmark leaves the image
+            self.sending = self.view().lost_frames < LOST_FRAMES
         estimate = self.robot.estimate()
         position = np.array(estimate.position[:2])
         if self.boarded_at is None and self.platform_occupied():
