@@ -18,10 +18,15 @@ encoders and the arm's URDF model):
 - :mod:`.placement` — base placement (§IV-D): cone samples checked against M and by the arm's IK;
 - :mod:`.launch_pose` — pre-launch pose ξ_MAV, the Phase I goal g, the insertion line, the launch attitude
   check (§IV-E output, §IV-F);
+- :mod:`.arm_motion` — collision-free arm motion (§IV-F): python-fcl checks of the arm (and what it
+  carries) against M and the robot, OMPL RRT* in joint space, seeded;
 - :mod:`.scan` — the ``aperture_scan`` skill: arm scanning poses → M, L_a, ranked candidates;
-- :mod:`.approach` — the ``approach_aperture`` skill: a placement for a ranked aperture, driven to.
+- :mod:`.approach` — the ``approach_aperture`` skill: a placement for a ranked aperture, driven to;
+- :mod:`.analyze` — the ``analyze_aperture`` skill: the aperture detected again from there, its profile
+  analysis and launch plans.
 """
 
+from .arm_motion import ArmCollisionModel, ArmPlanParams, plan_arm_path
 from .belief import ApertureBelief, BeliefParams, aperture_region
 from .detection import ApertureCandidate, DepthFrame, DetectionParams, detect_apertures, eye_in_hand_frame
 from .launch_pose import LaunchParams, LaunchPlan, attitude_ok, plan_launch, plan_launches, pre_launch_pose
@@ -32,9 +37,9 @@ from .silhouette import mav_contour, mav_silhouette
 from .volumetric import VolumetricMap, sensor_cloud
 
 __all__ = [
-    "ApertureBelief", "ApertureCandidate", "BeliefParams", "CameraModel", "DepthFrame", "DetectionParams",
-    "LaunchConfiguration", "LaunchParams", "LaunchPlan", "Placement", "PlacementParams", "ProfileParams",
-    "RankedAperture", "VolumetricMap", "aperture_region", "attitude_ok", "detect_apertures", "eye_in_hand_frame",
-    "mav_contour", "mav_silhouette", "plan_launch", "plan_launches", "plan_placements", "pre_launch_pose",
-    "profile_analysis", "rank_apertures", "sensor_cloud",
+    "ApertureBelief", "ApertureCandidate", "ArmCollisionModel", "ArmPlanParams", "BeliefParams", "CameraModel",
+    "DepthFrame", "DetectionParams", "LaunchConfiguration", "LaunchParams", "LaunchPlan", "Placement",
+    "PlacementParams", "ProfileParams", "RankedAperture", "VolumetricMap", "aperture_region", "attitude_ok",
+    "detect_apertures", "eye_in_hand_frame", "mav_contour", "mav_silhouette", "plan_arm_path", "plan_launch",
+    "plan_launches", "plan_placements", "pre_launch_pose", "profile_analysis", "rank_apertures", "sensor_cloud",
 ]
