@@ -512,8 +512,9 @@ def what_was_run(results: dict[str, Any]) -> list[str]:
     rep = results["repeatability"]
     default = rep["default"]
     trials = next(iter(default.values()))["trials"]
-    full = (len(exp3["poses"]) >= 10 and exp3["trials"] >= 3 and len(default) == len(GRADES_M) and trials >= 30
-            and "noise_2" in rep)
+    full_default = (len(exp3["poses"]) >= 10 and exp3["trials"] >= 3 and len(default) == len(GRADES_M)
+                    and trials >= 30)
+    full = full_default and "noise_2" in rep
     return [
         f"- Experiment III: {len(exp3['poses'])} departure location(s) × {exp3['trials']} trial(s) per approach "
         "(full: 10 × 3).",
@@ -523,6 +524,10 @@ def what_was_run(results: dict[str, Any]) -> list[str]:
         f"- Feature extraction: `benchmarks/ugv_features.py`'s views, {'quick' if results['quick'] else 'full'} "
         "repetitions.",
     ] + ([] if full else [
+        "",
+        "**The noise_scale 2 repeatability is not in this page** (`--default-sensing-only`); every other count is "
+        "the full one.",
+    ] if full_default else [
         "",
         "**These are quick counts**, far below the full ones (the machine is shared with other long jobs). Every "
         "figure below is from the runs listed, none is extrapolated; with 3 trials a Wilson interval is wide and "
