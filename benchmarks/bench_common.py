@@ -132,6 +132,17 @@ def print_targets(title: str, labels: Mapping[str, str], checks: Mapping[str, tu
     print_tables([(title, ("target", "measured", "met"), rows)], machine)
 
 
+def conclude(title: str, labels: Mapping[str, str], checks: Mapping[str, tuple[bool, str]], results: dict[str, Any],
+             report: Path, out: Path) -> dict[str, Any]:
+    """A benchmark's ending: its targets into ``results`` and printed, the Markdown ``report`` named, the JSON
+    written to ``out``; returns ``results``."""
+    results["targets"] = {k: {"met": ok, "measured": m} for k, (ok, m) in checks.items()}
+    print_targets(title, labels, checks, results["machine"])
+    print(f"report: {report}")
+    write_report(results, out)
+    return results
+
+
 def write_report(report: dict[str, Any], out: Path) -> None:
     """Write ``report`` as indented JSON to ``out`` (folders made as needed) and say where."""
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -73,9 +73,8 @@ from bench_common import (  # the module next to this script
     best_seconds,
     campaign,
     campaign_arguments,
+    conclude,
     machine_info,
-    print_targets,
-    write_report,
 )
 
 from marsupial.geometry import heading_rotation, yaw_of
@@ -843,11 +842,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         results["benchmark_wall_time_s"] = time.perf_counter() - started
         report(results, images, args.report, cycles)
         checks = verdicts(results, cycles)
-        results["targets"] = {k: {"met": ok, "measured": m} for k, (ok, m) in checks.items()}
-    print_targets("landing targets", TARGETS, checks, results["machine"])
-    print(f"report: {args.report}")
-    write_report(results, args.out)
-    return results
+    return conclude("landing targets", TARGETS, checks, results, args.report, args.out)
 
 
 if __name__ == "__main__":

@@ -61,7 +61,7 @@ from typing import Any
 import cv2
 import numpy as np
 import ugv_features  # the feature-extraction benchmark next to this script
-from bench_common import campaign, campaign_arguments, machine_info, print_targets, write_report
+from bench_common import campaign, campaign_arguments, conclude, machine_info
 
 from marsupial.geometry import yaw_of
 from marsupial.skills.ugv_docking.precision import PrecisionParams, analyse
@@ -769,11 +769,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             r["wall_time_s"] for rows in results["repeatability"].values() for r in rows.values())
         report(results, images, args.report)
         checks = verdicts(results)
-        results["targets"] = {k: {"met": ok, "measured": m} for k, (ok, m) in checks.items()}
-    print_targets("ugv docking targets", TARGETS, checks, results["machine"])
-    print(f"report: {args.report}")
-    write_report(results, args.out)
-    return results
+    return conclude("ugv docking targets", TARGETS, checks, results, args.report, args.out)
 
 
 if __name__ == "__main__":
