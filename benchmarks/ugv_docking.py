@@ -477,7 +477,7 @@ def plot_repeatability(repeat: dict[str, Any], img: Path) -> str:
         rate = np.array([r["successes"] / r["trials"] for r in rows])
         low, high = np.array([r["ci95"] for r in rows]).T
         ax.errorbar(np.array([r["d_mc_m"] for r in rows]) + 0.02 * k, 100 * rate,
-                    yerr=100 * np.vstack([rate - low, high - rate]), marker="o", capsize=3,
+                    yerr=100 * np.clip(np.vstack([rate - low, high - rate]), 0.0, None), marker="o", capsize=3,
                     ls="-" if len(rows) == len(GRADES_M) else "none",  # no curve across grades not run
                     label=f"{label} (Wilson 95 %)")
     ax.axhline(100 * PAPER_MIN_SUCCESS[0] / PAPER_MIN_SUCCESS[1], color="r", ls=":", label="paper's minimum, 26/30")
