@@ -105,6 +105,7 @@ def take_over(port, resource):
         "arm": lambda: port.hold_arm(),
         "docking": lambda: port.docking.magnet_on(),
         "lift": lambda: port.lower_platform(),
+        "gripper": lambda: port.close_gripper(),
     }[resource]()
 
 
@@ -144,6 +145,8 @@ CASES = {
     "release": ("yard_stored", "mother", {}),
     "approach_aperture": ("mms", "mms", {}),
     "analyze_aperture": ("mms", "mms", {}),
+    "insert_scout": ("mms", "mms", {}),
+    "launch_scout": ("mms", "mms", {"scout": "mms_tello_1"}),
 }
 
 

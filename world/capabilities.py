@@ -163,6 +163,14 @@ class HasGripper(Protocol):
 
 
 @runtime_checkable
+class HasScoutLauncher(Protocol):
+    """Launching apparatuses with micro-scouts, held by the gripper (resource ``gripper``): the launch command."""
+
+    def release_scout(self) -> bool:
+        """Open the held apparatus's hold on its MAV; whether one was let go."""
+
+
+@runtime_checkable
 class HasLift(Protocol):
     """A lifting platform (resource ``lift``): raise, lower, height, its load switch and travel."""
 
@@ -186,7 +194,8 @@ class HasLift(Protocol):
 
 #: every capability, by name (``marsupial skills`` and error messages name them so)
 CAPABILITIES: tuple[type, ...] = (
-    HasBattery, HasBase, HasLidar, HasPlatform, Rotorcraft, HasArm, HasArmModel, Carrier, HasGripper, HasLift,
+    HasBattery, HasBase, HasLidar, HasPlatform, Rotorcraft, HasArm, HasArmModel, Carrier, HasGripper,
+    HasScoutLauncher, HasLift,
 )
 
 

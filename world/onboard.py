@@ -424,6 +424,7 @@ class ManipulatorOnboard(ArmModelOnboard):
     commands: ClassVar[Mapping[str, str]] = {
         **WheeledOnboard.commands,
         "set_joint_targets": "arm", "hold_arm": "arm", "open_gripper": "gripper", "close_gripper": "gripper",
+        "release_scout": "gripper",
     }
     safe_stops: ClassVar[Mapping[str, str]] = {"base": "stop", "arm": "hold_arm"}  # the gripper keeps what it holds
     __slots__ = ()
@@ -441,16 +442,20 @@ class ManipulatorOnboard(ArmModelOnboard):
         return self._robot.arm_encoders()  # type: ignore[attr-defined]
 
     def open_gripper(self) -> None:
-        """Open the fingers."""
+        """Open the fingers, letting go of what they hold."""
         self._robot.open_gripper()  # type: ignore[attr-defined]
 
     def close_gripper(self) -> None:
-        """Close the fingers."""
+        """Close the fingers; they hold an apparatus handle they close around."""
         self._robot.close_gripper()  # type: ignore[attr-defined]
 
     def gripper_opening(self) -> float:
         """Gap between the fingers (m), from their encoder."""
         return float(self._robot.gripper_opening())  # type: ignore[attr-defined]
+
+    def release_scout(self) -> bool:
+        """Open the held launching apparatus's hold on its MAV (the launch command); whether one was let go."""
+        return bool(self._robot.release_scout())  # type: ignore[attr-defined]
 
 
 class LiftOnboard(WheeledOnboard):

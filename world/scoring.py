@@ -14,7 +14,11 @@ whatever the mission:
 - ``unintended_contacts`` (label ``robot`` = the UAV), cumulative, and an
   ``unintended_contact`` event (``uav``, ``carrier``, ``uav_link``,
   ``carrier_link``) for every touch between a quadrotor that is not docked
-  and a carrier with a docking device, other than on Part A (Narváez §V).
+  and a carrier with a docking device, other than on Part A (Narváez §V);
+- ``rim_contacts`` (label ``robot`` = the MMS), cumulative, and a
+  ``rim_contact`` event (``carrier``, ``part``, ``wall``, ``position``) for
+  every touch of an MMS's arm, launching apparatus or held MAV with the
+  aperture structure (:mod:`.rim_contacts`; Arora & Papachristos §IV-F).
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ import numpy as np
 from marsupial.geometry import heading_rotation, yaw_of
 
 from .contacts import ContactEvent, ContactMonitor
+from .rim_contacts import RimContacts, RimTouch
 
 if TYPE_CHECKING:
     from .robots.base import Robot
@@ -69,6 +74,14 @@ class Referee:
                 self.contacts[uav.name] = 0
         for name in self.contacts:
             sink.metric("unintended_contacts", 0, robot=name)
+        self.rim = RimContacts(world, self._rim_touched)
+        for name in self.rim.count:
+            sink.metric("rim_contacts", 0, robot=name)
+
+    def _rim_touched(self, touch: RimTouch) -> None:
+        self.sink.metric("rim_contacts", self.rim.count[touch.carrier], robot=touch.carrier)
+        self.sink.event("rim_contact", carrier=touch.carrier, part=touch.part, wall=touch.wall,
+                        position=[round(x, 4) for x in touch.position])
 
     def _touch_handler(self, uav: Robot, carrier: Robot) -> Any:
         def touched(event: ContactEvent) -> None:
@@ -90,9 +103,10 @@ class Referee:
         """Nothing before physics."""
 
     def post_physics(self, dt: float) -> None:
-        """Update the contact monitors; sample the tracking errors when due."""
+        """Update the contact monitors and the rim watch; sample the tracking errors when due."""
         for _, monitor in self._monitors:
             monitor.post_physics(dt)
+        self.rim.post_physics(dt)
         now = self.world.now
         if self._landing and now + 1e-9 >= self._next_sample:
             self._next_sample = now + TRACKING_PERIOD_S

@@ -51,6 +51,7 @@ from marsupial.world.capabilities import HasArmModel, HasBase
 
 from ..navigation import pure_pursuit
 from ..uav_docking.team import phase_event
+from .insertion import level_insertion_tcp
 from .placement import RHO_M, CameraModel, Placement, PlacementParams, plan_placements
 from .scan import APERTURES, VOLUMETRIC_MAP, fresh_frame
 from .volumetric import sensor_cloud
@@ -96,6 +97,10 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
         """Every how many depth pixels a ray of a ground view is inserted into M."""
         max_range: float = Field(4.0, gt=0.0)
         """Rays of the ground views are truncated at this range (m)."""
+        reach_depth: float | None = Field(0.17, ge=0.0, le=0.5)
+        """The placement must also let the arm hold the MAV level this far (m) past the aperture plane and
+        ``standoff`` in front of it (the insertion's reach, §IV-D: "the mounted arm workspace reaches the
+        aperture"); none: viewing only."""
         camera: str = "camera"
         """The eye-in-hand RGB-D camera."""
 
@@ -174,6 +179,13 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
         self.feedback_message = f"looking at the ground: {len(self.looks)} views to go"
         return Status.RUNNING
 
+    def _tool_goals(self, target: np.ndarray, normal: np.ndarray) -> list[np.ndarray]:
+        """The insertion's tcp poses the placement must reach (none without ``reach_depth``)."""
+        depth = self.params.reach_depth
+        if depth is None:
+            return []
+        return [level_insertion_tcp(target, normal, offset) for offset in (self.params.standoff, -depth)]
+
     def _plan(self) -> Status:
         """Placements for the chosen aperture from the scan's M; the best is the goal."""
         p = self.params
@@ -194,7 +206,7 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
             aperture.m_A, aperture.normal_nav, occupancy, self.robot.arm_kinematics,
             CameraModel.of_port(self.robot.sensor(p.camera)), self.robot.arm_mount(),
             (*estimate.position[:2], estimate.yaw), self.robot.joint_positions(), float(estimate.position[2]),
-            self.context.rng(f"{self.name}/placement"), params,
+            self.context.rng(f"{self.name}/placement"), params, self._tool_goals(aperture.m_A, aperture.normal_nav),
         )
         phase_event(self, "placement", aperture=[round(float(x), 3) for x in aperture.m_A], feasible=len(placements),
                     placement=placements[0].summary() if placements else None)

@@ -35,7 +35,7 @@ roll φ, pitch θ, yaw ψ are its Z-Y-X Euler angles (R = Rz(ψ) Ry(θ) Rx(φ)).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -79,6 +79,7 @@ class LaunchPlan:
         R_launch: the launch attitude after Phase III's levelling.
         roll, pitch: φ, θ of ``R_launch`` (rad).
         feasible: |φ| ≤ α_launch and |θ| ≤ α_launch.
+        rim: ``(n, 3)`` the aperture's contour C_a on the model plane (nav, m), for the rim checks of §IV-F.
     """
 
     pre_launch: np.ndarray
@@ -91,6 +92,7 @@ class LaunchPlan:
     roll: float
     pitch: float
     feasible: bool
+    rim: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)), repr=False)
 
     def summary(self) -> dict[str, object]:
         """A JSON-ready record (m, rad, rounded)."""
@@ -132,8 +134,9 @@ def pre_launch_pose(config: LaunchConfiguration, view: FrontoParallelView, frame
 
 
 def plan_launch(config: LaunchConfiguration, view: FrontoParallelView, frame: InertialFrame,
-                params: LaunchParams | None = None) -> LaunchPlan:
-    """ξ_MAV, g, the insertion line, the launch pose and its attitude check for one configuration (§IV-F)."""
+                params: LaunchParams | None = None, rim: np.ndarray | None = None) -> LaunchPlan:
+    """ξ_MAV, g, the insertion line, the launch pose and its attitude check for one configuration (§IV-F);
+    ``rim``: the aperture's contour on the plane (nav, m), kept with the plan."""
     params = params or LaunchParams()
     position, R_pre, normal = pre_launch_pose(config, view, frame)
     goal = position + params.d_l * normal  # Phase I: g = d_l·n̂ + [x y z]ᵀ
@@ -142,11 +145,13 @@ def plan_launch(config: LaunchConfiguration, view: FrontoParallelView, frame: In
     R_launch = R_pre @ rot_x(-correction)  # Phase III: a turn about body x, the insertion axis
     launch_roll, launch_pitch, _ = roll_pitch_yaw(R_launch)
     return LaunchPlan(position, R_pre, normal, goal, (goal, position), position - params.d_l * normal, R_launch,
-                      launch_roll, launch_pitch, attitude_ok(R_launch, params.alpha_launch))
+                      launch_roll, launch_pitch, attitude_ok(R_launch, params.alpha_launch),
+                      np.zeros((0, 3)) if rim is None else rim)
 
 
 def plan_launches(candidate: ApertureCandidate, configs: list[LaunchConfiguration],
                   params: LaunchParams | None = None) -> list[LaunchPlan]:
     """:func:`plan_launch` of each configuration of ``candidate``'s profile analysis, the feasible ones, in order."""
-    plans = [plan_launch(c, candidate.view, candidate.frame, params) for c in configs]
+    rim = candidate.frame.to_nav(candidate.view.pixel_to_I(candidate.contour_px.astype(float)))
+    plans = [plan_launch(c, candidate.view, candidate.frame, params, rim) for c in configs]
     return [p for p in plans if p.feasible]

@@ -197,7 +197,12 @@ def footprint_points(poses: np.ndarray, footprint: Footprint, spacing: float) ->
 
 
 class FootprintGrid:
-    """M collapsed onto the ground over a box: a cell is blocked when a voxel of the base's height band is not free.
+    """M collapsed onto the ground over a box: a cell is blocked when a voxel of the base's height band is occupied
+    or none of them is known.
+
+    The ground views (``approach_aperture``) see the band's voxels along slanted rays, which leave some upper voxels of
+    a column unknown above voxels seen free; an obstacle standing there would have been seen by those rays or by the
+    level scan, so a column with free voxels and no occupied one is free.
 
     Cells are M's voxel columns (OctoMap keys: floor(coordinate / resolution)). Built from the octree's
     leaves in the box (one pass over the known voxels), so everything not listed is unknown.
@@ -237,7 +242,7 @@ class FootprintGrid:
         self.key_lo = key_lo[:2]
         self.shape = shape[:2]
         self.occupied = (states == OCCUPIED).any(axis=2)
-        self.blocked = self.occupied | (states == UNKNOWN).any(axis=2)
+        self.blocked = self.occupied | (states == UNKNOWN).all(axis=2)
         if known_free is not None and len(known_free):
             ij = self._cells(np.asarray(known_free, dtype=float))
             inside = self._inside(ij)
@@ -304,7 +309,7 @@ def placement_cost(poses: np.ndarray, q: np.ndarray, start: np.ndarray, q_ref: n
 def plan_placements(target: np.ndarray, normal: np.ndarray, occupancy: VolumetricMap, kinematics: Any,
                     camera: CameraModel, arm_mount: tuple[np.ndarray, np.ndarray], start: Sequence[float],
                     q_ref: np.ndarray, ground_z: float, rng: np.random.Generator,
-                    params: PlacementParams | None = None) -> list[Placement]:
+                    params: PlacementParams | None = None, tool_goals: Sequence[np.ndarray] = ()) -> list[Placement]:
     """Feasible base placements to see and reach the aperture at ``target`` (§IV-D), lowest cost first.
 
     Args:
@@ -319,6 +324,8 @@ def plan_placements(target: np.ndarray, normal: np.ndarray, occupancy: Volumetri
         ground_z: height of the ground plane (nav, m): the base estimate's z.
         rng: the random stream of the cone samples (deterministic given its seed).
         params: :class:`PlacementParams`.
+        tool_goals: tip-frame poses (4×4, nav) the arm must also reach by IK from the placement (the insertion
+            through the aperture: "the mounted arm workspace reaches the aperture").
 
     Returns:
         :class:`Placement` s (empty when the cone is blocked, unreachable, or the camera's sight is blocked).
@@ -348,9 +355,15 @@ def plan_placements(target: np.ndarray, normal: np.ndarray, occupancy: Volumetri
     goals_p = np.einsum("nij,nj->ni", R_M_T, p_link - p_M)
     goals_R = R_M_T @ R_link
     solution = ClosedFormIK(kinematics, camera.link).solve(goals_p, goals_R, q_ref)
+    reaches = np.ones(len(poses), dtype=bool)
+    tip_ik = ClosedFormIK(kinematics) if len(tool_goals) else None
+    for T in tool_goals:
+        assert tip_ik is not None
+        tip = tip_ik.solve(np.einsum("nij,nj->ni", R_M_T, T[:3, 3] - p_M), R_M_T @ T[:3, :3], q_ref)
+        reaches &= tip.valid
     placements = []
     costs = placement_cost(poses, solution.q, start_pose, q_ref, params)
-    for i in np.flatnonzero(solution.valid):
+    for i in np.flatnonzero(solution.valid & reaches):
         reached = _camera_at(kinematics, camera, solution.q[i], p_M[i], R_M[i])
         if reached is None or np.linalg.norm(reached[0] - p_opt) > 1e-4:
             continue

@@ -29,10 +29,17 @@ Holding, in the simulation:
   before take-off (``on_released``); the Tello then rests on the tray
   between 8 mm lips until its motors lift it off.
 * The gripper: :meth:`MMS.close_gripper` closes the fingers with a limited
-  force; :meth:`MMS.grasp` then welds the apparatus to the gripper at their
-  relative pose if both fingers touch the handle and the finger gap matches
-  the handle width within :data:`GRASP_GAP_TOLERANCE_M`. :meth:`MMS.release`
-  removes the weld and opens the fingers.
+  force; while they are commanded closed, :meth:`MMS.grasp` is tried on each
+  apparatus after every physics step: it welds the apparatus to the gripper
+  at their relative pose once both fingers touch the handle and the finger
+  gap matches the handle width within :data:`GRASP_GAP_TOLERANCE_M` (the
+  friction grip of the real fingers). :meth:`MMS.open_gripper` removes the
+  weld and opens the fingers (:meth:`MMS.release`); an apparatus let go with
+  its handle within :data:`STOW_TOLERANCE_M` and :data:`STOW_TOLERANCE_RAD`
+  of an empty holster's frame is latched there again (stowed).
+* The launch: :meth:`MMS.release_scout` opens the held apparatus's hold on
+  its MAV (:meth:`LaunchingApparatus.release_mav`), the "appropriately timed
+  command" of §IV-F after which the MAV takes off from the cradle.
 
 Held pairs do not collide with each other. Stowed MAVs cost almost nothing
 per physics step this way: a resting compound-on-compound contact or a
@@ -41,6 +48,7 @@ fixed constraint each costs the solver tens of microseconds per step.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -74,6 +82,8 @@ FINGER_FORCE_N = 20.0  # grip force of each finger (N)
 FINGER_SPEED_MPS = 0.05  # finger closing speed (m/s)
 GRASP_GAP_TOLERANCE_M = 0.003  # finger gap vs handle width accepted as "closed around the handle"
 WELD_FORCE_N = 500.0  # strength of the gripper–apparatus and apparatus–MAV welds (N)
+STOW_TOLERANCE_M = 0.015  # handle centre from an empty holster's frame, at which a let-go apparatus latches (m)
+STOW_TOLERANCE_RAD = 0.15  # handle attitude from the holster frame's, at which it latches (rad)
 
 MMS_LIMITS = DiffDriveLimits(max_speed=1.0, max_omega=1.0, max_accel=0.5, max_alpha=1.0)
 """Husky-class base; the paper gives no speeds."""
@@ -158,6 +168,11 @@ class LaunchingApparatus:
     def latched(self) -> bool:
         """True while latched in a holster."""
         return self._holster is not None
+
+    @property
+    def holster_link(self) -> int | None:
+        """The link index of the holster it is latched in, ``None`` while free."""
+        return None if self._holster is None else self._holster[1]
 
     def latch(self, body: int, link: int) -> None:
         """Latch the apparatus where it is to ``link`` of ``body``: a holster fixed to that body's base.
@@ -322,9 +337,10 @@ class MMS(WheeledRobot):
         self.tcp_link = self.link_index("tcp")
         for finger in self.fingers:
             pybullet.resetJointState(body, finger, self.finger_travel, physicsClientId=cid)
-        self.open_gripper()
         self.held: LaunchingApparatus | None = None
         self._grip_weld: int | None = None
+        self._closing = False
+        self.open_gripper()
         self.holsters: dict[str, Holster] = {}
         for i, holster in enumerate(HOLSTERS):
             link = self.link_index(holster)
@@ -386,11 +402,15 @@ class MMS(WheeledRobot):
             )
 
     def open_gripper(self) -> None:
-        """Open both fingers fully (gap 2 × 0.04 m)."""
-        self._command_fingers(self.finger_travel)
+        """Open both fingers fully (gap 2 × 0.04 m), letting go of a held apparatus (:meth:`release`)."""
+        self.release()
 
     def close_gripper(self) -> None:
-        """Close both fingers with :data:`FINGER_FORCE_N` each; they stop on whatever is between them."""
+        """Close both fingers with :data:`FINGER_FORCE_N` each; they stop on whatever is between them.
+
+        An apparatus whose handle they close around is held from then on (:meth:`grasp`, tried every step).
+        """
+        self._closing = True
         self._command_fingers(0.0)
 
     @simulates_hardware
@@ -423,14 +443,46 @@ class MMS(WheeledRobot):
         return True
 
     def release(self) -> LaunchingApparatus | None:
-        """Let go of the held apparatus and open the fingers; returns what was held."""
+        """Let go of the held apparatus and open the fingers; returns what was held.
+
+        An apparatus let go at an empty holster (:meth:`_stow`) is latched there.
+        """
         held = self.held
         if self._grip_weld is not None:
             pybullet.removeConstraint(self._grip_weld, physicsClientId=self.cid)
             self._grip_weld = None
         self.held = None
-        self.open_gripper()
+        self._closing = False
+        self._command_fingers(self.finger_travel)
+        if held is not None:
+            self._stow(held)
         return held
+
+    def _stow(self, apparatus: LaunchingApparatus) -> None:
+        """Latch ``apparatus`` into the empty holster its handle frame lies at, if any (the holster's pose exactly)."""
+        p_handle, q_handle = apparatus.handle_pose()
+        occupied = {a.holster_link for a in self.apparatuses()}
+        for holster in self.holsters.values():
+            if holster.link in occupied:
+                continue
+            p, q = self.link_pose(holster.link)
+            turn = pybullet.getDifferenceQuaternion(list(q), list(q_handle))
+            angle = 2.0 * math.acos(min(1.0, abs(turn[3])))
+            if np.linalg.norm(p_handle - np.asarray(p)) <= STOW_TOLERANCE_M and angle <= STOW_TOLERANCE_RAD:
+                pybullet.resetBasePositionAndOrientation(apparatus.body_id, list(p), list(q), physicsClientId=self.cid)
+                apparatus.latch(self.body_id, holster.link)
+                return
+
+    def apparatuses(self) -> list[LaunchingApparatus]:
+        """The launching apparatuses the MMS was loaded with, left then right."""
+        return [h.apparatus for h in self.holsters.values()]
+
+    def release_scout(self) -> bool:
+        """Open the held apparatus's hold on its MAV (the launch command, §IV-F); whether a MAV was let go."""
+        if self.held is None or not self.held.mav_secured:
+            return False
+        self.held.release_mav()
+        return True
 
     # ------------------------------------------------------------ holsters
     def launch_apparatus(self, which: int | str) -> LaunchingApparatus:
@@ -459,6 +511,10 @@ class MMS(WheeledRobot):
         v, w = pybullet.getBaseVelocity(self.body_id, physicsClientId=self.cid)
         for holster in self.holsters.values():
             holster.apparatus.follow(p, q, v, w)
+        if self._closing and self.held is None:
+            for apparatus in self.apparatuses():
+                if self.grasp(apparatus):
+                    break
 
     def state(self) -> dict[str, Any]:
         """Pose, speeds, arm joint angles (rad), gripper gap (m) and the held apparatus."""

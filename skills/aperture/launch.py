@@ -1,0 +1,158 @@
+"""``launch_scout``: Phase III, the launch command, and the arm's retreat with the empty apparatus (§IV-F).
+
+Arora & Papachristos, §IV-F: after Phase II "the MAV should have egressed
+from the back side of the aperture and held by the elongated apparatus";
+Phase III turns it to the launch pose ξ_MAV^ref (|φ|, |θ| ≤ α_launch), "where
+the MAV is ready to takeoff based on an appropriately timed command". Stages:
+
+1. *Phase III*: the turn ``insert_scout`` planned (about the MAV's body x);
+2. *launch*: once the arm has settled for ``settle`` s, the apparatus lets the
+   MAV go (:meth:`~marsupial.world.onboard.ManipulatorOnboard.release_scout`);
+   the MAV's own skill takes off (it senses that it is no longer held);
+3. *clear*: the MMS holds the arm still until the MAV's estimate, as the team
+   link carries it, is ``clear_height`` above where it was at the release
+   (FAILURE after ``clear_timeout``: the MAV did not leave);
+4. *retreat*: back along Phases III, II and the entry in reverse (the same
+   checked paths, now without the MAV), RRT* to above the holster the
+   apparatus came from, the descent, the fingers open (the apparatus latches
+   into its holster), the lift, and RRT* back to the viewing pose the arm
+   had before ``insert_scout``.
+
+What it senses: the arm encoders, the base estimate, the scout's estimate
+telemetry on the team link, the map M and the insertion ``insert_scout``
+wrote. Blackboard: reads ``{robot}/insertion`` and ``{robot}/volumetric_map``.
+Events: ``state_change`` phases ``phase3``, ``launched`` (the MAV's estimated
+position), ``cleared``, ``stowed``. RUNNING while no insertion is on the blackboard; SUCCESS with the apparatus back in its
+holster and the arm at the viewing pose.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from py_trees.common import Status
+from pydantic import Field
+
+from ..uav_docking.team import phase_event
+from .insert import INSERTION, ArmSkill, ArmSkillParams, Insertion
+from .insertion import HOLSTERS, T_HANDLE_TCP, cartesian_path, line_poses
+from .scan import VOLUMETRIC_MAP
+
+
+class LaunchScout(ArmSkill):
+    """Turn the inserted MAV to its launch attitude, let it go, and bring the empty apparatus back to its holster."""
+
+    class Params(ArmSkillParams):
+        scout: str
+        """The MAV being launched (its estimate telemetry tells when it has left the apparatus)."""
+        settle: float = Field(0.5, ge=0.0)
+        """Seconds the arm holds still at the launch pose before the release."""
+        clear_height: float = Field(0.15, gt=0.0)
+        """The MAV has left once its estimate is this far (m) above its estimate at the release."""
+        clear_timeout: float = Field(15.0, gt=0.0)
+        """Seconds the MAV has to leave before the skill fails."""
+
+    params: Params
+    reads = (f"{{robot}}/{INSERTION}", f"{{robot}}/{VOLUMETRIC_MAP}")
+
+    def start(self) -> None:
+        super().start()
+        self.insertion: Insertion | None = self.read(f"{self.robot_name}/{INSERTION}")
+        self.stage = "turn"
+        self.since = self.now
+        self.released_at: np.ndarray | None = None
+
+    def step(self) -> Status:
+        if self.insertion is None:
+            self.insertion = self.read(f"{self.robot_name}/{INSERTION}")
+            self.feedback_message = "waiting for an inserted MAV (insert_scout)"
+            return Status.RUNNING
+        if self.moving():
+            return Status.RUNNING
+        return getattr(self, f"_{self.stage}")()
+
+    def _scout_position(self) -> np.ndarray | None:
+        message = self.link.latest(self.params.scout)
+        return None if message is None else np.asarray(message.payload.position, dtype=float)
+
+    def _turn(self) -> Status:
+        phase_event(self, "phase3", roll=round(self.insertion.plan.roll, 4), pitch=round(self.insertion.plan.pitch, 4))
+        self.run(self.insertion.phases.turn, True, "phase III: to the launch attitude")
+        self.stage, self.since = "launch", -1.0
+        return Status.RUNNING
+
+    def _launch(self) -> Status:
+        if self.since < 0.0:
+            self.since = self.now
+        self.robot.hold_arm()
+        if self.now - self.since < self.params.settle:
+            self.feedback_message = "settling at the launch pose"
+            return Status.RUNNING
+        position = self._scout_position()
+        if position is None:
+            self.feedback_message = f"waiting for {self.params.scout}'s telemetry"
+            return Status.RUNNING
+        self.robot.release_scout()
+        self.released_at = position
+        phase_event(self, "launched", scout=self.params.scout, position=[round(float(x), 3) for x in position])
+        self.stage, self.since = "clear", self.now
+        return Status.RUNNING
+
+    def _clear(self) -> Status:
+        position = self._scout_position()
+        assert self.released_at is not None
+        climbed = -np.inf if position is None else float(position[2] - self.released_at[2])
+        if climbed >= self.params.clear_height:
+            phase_event(self, "cleared", scout=self.params.scout, climbed=round(climbed, 3))
+            phases = self.insertion.phases
+            back = np.vstack((phases.turn[::-1], phases.slip[::-1], phases.entry[::-1]))
+            self.run(back, True, "retreating through the aperture")
+            self.stage = "to_holster"
+            return Status.RUNNING
+        if self.now - self.since > self.params.clear_timeout:
+            self.feedback_message = f"{self.params.scout} has not left in {self.params.clear_timeout:.0f} s"
+            return Status.FAILURE
+        self.feedback_message = f"waiting for {self.params.scout} to climb off ({climbed:+.2f} m)"
+        return Status.RUNNING
+
+    def _to_holster(self) -> Status:
+        holster = self.insertion.holster
+        model = self.model(True, False, list(self.insertion.stowed), self.insertion.plan)
+        q_above = self.insertion.above_holster
+        path = self.free_path(model, self.robot.joint_positions(), q_above, "to_holster")
+        grasp = self.holster_frame(holster) @ T_HANDLE_TCP
+        self.descent = cartesian_path(self.ik, line_poses(self.above(holster), grasp), q_above)
+        if path is None or self.descent is None:
+            self.feedback_message = f"no collision-free path back to {holster}"
+            return Status.FAILURE
+        self.run(path, False, f"back to {holster}")
+        self.stage = "descend"
+        return Status.RUNNING
+
+    def _descend(self) -> Status:
+        self.run(np.vstack((self.insertion.above_holster, self.descent)), True, "putting the apparatus back")
+        self.stage = "let_go"
+        return Status.RUNNING
+
+    def _let_go(self) -> Status:
+        self.robot.open_gripper()
+        if self.robot.gripper_opening() < 0.06:
+            self.feedback_message = f"opening the gripper: {self.robot.gripper_opening():.3f} m"
+            return Status.RUNNING
+        phase_event(self, "stowed", holster=self.insertion.holster)
+        self.run(np.vstack((self.descent[::-1], self.insertion.above_holster)), True, "lifting off the holster")
+        self.stage = "to_view"
+        return Status.RUNNING
+
+    def _to_view(self) -> Status:
+        model = self.model(False, False, list(HOLSTERS))
+        path = self.free_path(model, self.robot.joint_positions(), self.insertion.view_q, "to_view")
+        if path is None:
+            self.feedback_message = "no collision-free path back to the viewing pose"
+            return Status.FAILURE
+        self.run(path, False, "back to the viewing pose")
+        self.stage = "done"
+        return Status.RUNNING
+
+    def _done(self) -> Status:
+        self.feedback_message = f"{self.params.scout} launched, the apparatus back in {self.insertion.holster}"
+        return Status.SUCCESS
