@@ -6,7 +6,8 @@ Channels (see ``docs/logs.md`` for every field):
 topic                    schema                             what
 =======================  =================================  ==============================================
 ``/events``              ``marsupial.Event``                run_start, state_change, preemption, operator,
-                                                            outcome, run_end, error, unintended_contact
+                                                            outcome, run_end, error, unintended_contact,
+                                                            rim_contact
 ``/metrics``             ``marsupial.Metric``               ``{name, value, labels}``
 ``/log``                 ``foxglove.Log``                   one text line per event, plus free text
 ``/tf``                  ``foxglove.FrameTransform``        ``world`` -> ``<robot>`` per robot (true pose)
@@ -109,6 +110,7 @@ EVENT_KINDS: dict[str, tuple[str, ...]] = {
     "run_end": ("outcome", "sim_time"),
     "error": ("message",),
     "unintended_contact": ("uav", "carrier", "uav_link", "carrier_link"),  # the referee (marsupial.world.scoring)
+    "rim_contact": ("carrier", "part", "wall"),  # the referee (marsupial.world.rim_contacts)
 }
 
 #: fixed topic -> schema name (per-robot poses and camera images are added as they appear)
@@ -396,7 +398,7 @@ class Recorder:
         (``preemption``: preempted, by, why, robot; ``operator``: command,
         source; ``outcome``: node, skill, robot, status, message; ``run_end``:
         outcome, sim_time; ``error``: message; ``unintended_contact``: uav,
-        carrier, uav_link, carrier_link) and may carry more.
+        carrier, uav_link, carrier_link; ``rim_contact``: carrier, part, wall) and may carry more.
         ``t`` is simulated seconds.
         """
         required = EVENT_KINDS.get(kind)

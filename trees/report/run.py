@@ -29,7 +29,7 @@ __all__ = ["IMAGES_PER_CAMERA", "MAX_EVENT_ROWS", "phase_rows", "run_context", "
 MAX_EVENT_ROWS = 2000  # events listed in the table (a note says how many more there were)
 IMAGES_PER_CAMERA = 6  # frames shown per camera, evenly spread over the run
 _EVENT_CLASSES = {"error": "error", "preemption": "warning", "operator": "operator",
-                  "unintended_contact": "error", "run_end": "end", "outcome": "outcome"}
+                  "unintended_contact": "error", "rim_contact": "error", "run_end": "end", "outcome": "outcome"}
 
 
 def _depths(xml: str) -> dict[int, int]:
