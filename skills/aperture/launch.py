@@ -22,8 +22,9 @@ What it senses: the arm encoders, the base estimate, the scout's estimate
 telemetry on the team link, the map M and the insertion ``insert_scout``
 wrote. Blackboard: reads ``{robot}/insertion`` and ``{robot}/volumetric_map``.
 Events: ``state_change`` phases ``phase3``, ``launched`` (the MAV's estimated
-position), ``cleared``, ``stowed``. RUNNING while no insertion is on the blackboard; SUCCESS with the apparatus back in its
-holster and the arm at the viewing pose.
+position), ``cleared``, ``stowed``. RUNNING while no insertion is on the
+blackboard; SUCCESS with the apparatus back in its holster and the arm at
+the viewing pose.
 """
 
 from __future__ import annotations
