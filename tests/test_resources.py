@@ -147,6 +147,7 @@ CASES = {
     "analyze_aperture": ("mms", "mms", {}),
     "insert_scout": ("mms", "mms", {}),
     "launch_scout": ("mms", "mms", {"scout": "mms_tello_1"}),
+    "scout_takeoff": ("mms_released", "mms_tello_1", {}),
 }
 
 
@@ -168,9 +169,11 @@ def world_for(setup):
         if setup == "yard_boarded":  # on the platform, down at the floor
             place_link_at(child, "base_footprint", *mother.platform_pose())
         return world
-    if setup == "mms":
+    if setup in ("mms", "mms_released"):
         world = World(scene="collapsed_mockup", seed=3)
-        world.add_robot("mms", "mms", pose=[0.3, -2.4, 1.5708])
+        mms = world.add_robot("mms", "mms", pose=[0.3, -2.4, 1.5708])
+        if setup == "mms_released":  # the right tello let go in its holster: it takes off
+            mms.launch_apparatus("holster_right").release_mav()
         return world
     if setup["scene"] is None:
         world = World(seed=3)
