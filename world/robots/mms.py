@@ -485,6 +485,19 @@ class MMS(WheeledRobot):
         return True
 
     # ------------------------------------------------------------ holsters
+    def store(self, mav: Robot) -> None:
+        """Seat ``mav`` (a ``tello``) in the first apparatus without one, left holster first (a mission's
+        ``stored_on``); ``ValueError`` when it is no tello or every apparatus carries one."""
+        if getattr(mav, "kind", None) != "tello":
+            raise ValueError(f"the {self.kind}'s launching apparatuses carry tello micro-scouts, not a {mav.kind}")
+        for name, holster in self.holsters.items():
+            if holster.apparatus.mav is None:
+                holster.apparatus.load_mav(mav)
+                self.holsters[name] = Holster(name, holster.link, holster.apparatus, mav)
+                return
+        raise ValueError(f"every launching apparatus of {self.name} already carries a MAV "
+                         f"({', '.join(str(h.mav.name) for h in self.holsters.values() if h.mav is not None)})")
+
     def launch_apparatus(self, which: int | str) -> LaunchingApparatus:
         """The launching apparatus of holster ``which``: 0 / ``"holster_left"`` or 1 / ``"holster_right"``."""
         if isinstance(which, int) and 0 <= which < len(HOLSTERS):
