@@ -130,3 +130,19 @@ def test_safe_stop_holds_the_arm_and_stops_the_base():
         world.step(2.5)
         assert mms.arm_positions() == pytest.approx(q_stop, abs=0.02)
         assert abs(mms.speed()) < 1e-3
+
+
+def test_a_team_tello_stored_on_the_mms_sits_in_the_first_empty_apparatus():
+    with World() as world:
+        mms = world.add_robot("mms", mavs=False)
+        first, second = world.add_robot("tello", "first"), world.add_robot("tello", "second")
+        mms.store(first)
+        mms.store(second)
+        left, right = mms.launch_apparatus("holster_left"), mms.launch_apparatus("holster_right")
+        assert left.mav is first and right.mav is second and left.mav_secured and first.docked
+        assert mms.holsters["holster_left"].mav is first
+        assert first.pose()[0] == pytest.approx(left.seat_pose()[0] + [0, 0, first.spec.landed_height], abs=1e-6)
+        with pytest.raises(ValueError, match="already carries a MAV"):
+            mms.store(world.add_robot("tello", "third"))
+        with pytest.raises(ValueError, match="carry tello micro-scouts, not a bebop2"):
+            mms.store(world.add_robot("bebop2", "big"))
