@@ -144,6 +144,9 @@ CASES = {
     "release": ("yard_stored", "mother", {}),
     "approach_aperture": ("mms", "mms", {}),
     "analyze_aperture": ("mms", "mms", {}),
+    "scout": ("scout", "scout", {}),
+    "scout_land": ("scout", "scout", {}),
+    "scout_return": ("scout", "scout", {"home": [0.3, 1.0, 0.85]}),
 }
 
 
@@ -168,6 +171,11 @@ def world_for(setup):
     if setup == "mms":
         world = World(scene="collapsed_mockup", seed=3)
         world.add_robot("mms", "mms", pose=[0.3, -2.4, 1.5708])
+        return world
+    if setup == "scout":  # a Tello hovering past the amoeba aperture, the MMS before the wall
+        world = World(scene="collapsed_mockup", seed=3)
+        world.add_robot("mms", "mms", pose=[0.3, -2.4, 1.5708], mavs=False)
+        world.add_robot("tello", "scout", pose=[0.3, 0.4, 0.85, 1.5708])
         return world
     if setup["scene"] is None:
         world = World(seed=3)

@@ -80,7 +80,7 @@ COLOUR_CLASSES: dict[str, ColourClass] = {
 
 
 class HsvColourDetector(ObjectDetector):
-    """Colour segmentation in HSV with size and shape checks (module docstring) for the classes of :data:`COLOUR_CLASSES`."""
+    """Colour segmentation in HSV with size and shape checks (module docstring), classes of :data:`COLOUR_CLASSES`."""
 
     class Options(PluginOptions):
         min_area_px: int = Field(900, ge=1)

@@ -1,4 +1,4 @@
-"""The visually-servoed exploration policy: three column averages of the depth map → forward, clockwise, counter-clockwise.
+"""The visually-servoed exploration policy: three column averages of a depth map → forward or a yaw turn.
 
 Arora & Papachristos, §IV-G: "We divide the estimated depth image into three
 column subsets, and follow-up with pixel-averaging that allows us to compute a
@@ -74,7 +74,7 @@ def decide(depth: np.ndarray, bias: float = 0.0, rows: tuple[float, float] = (0.
 
 
 def velocity_command(action: str, forward_speed: float, turn_speed: float, yaw_rate: float) -> tuple[float, float]:
-    """``(vx, yaw_rate)`` (m/s, rad/s) of an action: forward at ``forward_speed``; a turn at ``turn_speed``, ∓``yaw_rate``.
+    """``(vx, yaw_rate)`` (m/s, rad/s) of an action: ``forward_speed`` ahead, or ``turn_speed`` and ∓``yaw_rate``.
 
     Clockwise (``r``) is a negative yaw rate about the up axis, counter-clockwise (``l``) positive.
     """

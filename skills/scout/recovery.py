@@ -88,7 +88,8 @@ class ScoutReturn(Skill["ScoutReturn.Params"]):
             self.feedback_message = "no recorded path and no home to return to"
             return Status.FAILURE
         estimate = self.robot.estimate()
-        while len(self.waypoints) > 1 and np.linalg.norm(self.waypoints[0] - estimate.position) <= self.params.tolerance:
+        tolerance = self.params.tolerance
+        while len(self.waypoints) > 1 and np.linalg.norm(self.waypoints[0] - estimate.position) <= tolerance:
             self.waypoints.pop(0)
         error = self.waypoints[0] - estimate.position
         distance = float(np.linalg.norm(error))

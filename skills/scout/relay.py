@@ -1,4 +1,5 @@
-"""The scout's video relay: front-camera frames JPEG-encoded on the MAV, sent over the team link, decoded on the carrier.
+"""The scout's video relay: front-camera frames JPEG-encoded on the MAV, sent over the team link, decoded on the
+carrier.
 
 Arora & Papachristos, §III-B and §V: the Tello "feeds back an encoded video
 stream to the main robot carrier", which computes the guidance on it; "each

@@ -55,7 +55,7 @@ SCOUT_PATH = "scout_path"
 
 @dataclass(frozen=True)
 class ScoutCommand:
-    """A guidance command the carrier sends: for which run (its start time, s), forward speed (m/s), yaw rate (rad/s)."""
+    """A guidance command the carrier sends: its run (the start time, s), forward speed (m/s), yaw rate (rad/s)."""
 
     run: float
     vx: float
@@ -106,7 +106,7 @@ class Scout(Skill["Scout.Params"]):
         breadcrumb_spacing: float = Field(0.25, gt=0.0)
         """Distance (m) between the recorded points of the path (``scout_path``)."""
         depth_estimator: str = "monocular_error_model"
-        """Depth estimator: a name of the ``marsupial.scout.depth_estimators`` entry points or 'package.module:Class'."""
+        """Depth estimator: a ``marsupial.scout.depth_estimators`` entry-point name or 'package.module:Class'."""
         depth_options: dict[str, Any] = {}
         """Options of the depth estimator (its ``Options``; see docs/scout.md)."""
         detector: str = "hsv_colour"
@@ -173,7 +173,8 @@ class Scout(Skill["Scout.Params"]):
     def _fly_newest_command(self) -> None:
         """Fly the carrier's newest command of this run, or hover when it is older than ``command_timeout``."""
         message = self.link.latest(self.params.carrier, COMMAND_TOPIC)
-        if message is None or message.payload.run != self.started or self.now - message.sent > self.params.command_timeout:
+        stale = message is None or self.now - message.sent > self.params.command_timeout
+        if stale or message.payload.run != self.started:
             self.robot.hover()
             return
         command: ScoutCommand = message.payload
