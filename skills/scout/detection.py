@@ -97,11 +97,11 @@ class HsvColourDetector(ObjectDetector):
             raise ValueError(f"the HSV colour detector knows no '{object_class}'; expected one of "
                              f"{', '.join(self.classes)}")
         hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)
-        mask = np.zeros(rgb.shape[:2], np.uint8)
+        mask: np.ndarray = np.zeros(rgb.shape[:2], np.uint8)
         for low, high in spec.hues:
-            mask |= cv2.inRange(hsv, (low, spec.min_saturation, spec.min_value), (high, 255, 255))
-        mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
-        count, _, stats, _ = cv2.connectedComponentsWithStats(mask)
+            mask = cv2.bitwise_or(mask, cv2.inRange(hsv, (low, spec.min_saturation, spec.min_value), (high, 255, 255)))
+        opened = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
+        count, _, stats, _ = cv2.connectedComponentsWithStats(opened)
         found = []
         for x, y, w, h, area in stats[1:count]:
             fill = area / float(w * h)

@@ -173,8 +173,8 @@ class Scout(Skill["Scout.Params"]):
     def _fly_newest_command(self) -> None:
         """Fly the carrier's newest command of this run, or hover when it is older than ``command_timeout``."""
         message = self.link.latest(self.params.carrier, COMMAND_TOPIC)
-        stale = message is None or self.now - message.sent > self.params.command_timeout
-        if stale or message.payload.run != self.started:
+        if (message is None or self.now - message.sent > self.params.command_timeout
+                or message.payload.run != self.started):
             self.robot.hover()
             return
         command: ScoutCommand = message.payload
