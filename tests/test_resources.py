@@ -148,6 +148,9 @@ CASES = {
     "insert_scout": ("mms", "mms", {}),
     "launch_scout": ("mms", "mms", {"scout": "mms_tello_1"}),
     "scout_takeoff": ("mms_released", "mms_tello_1", {}),
+    "scout": ("scout", "scout", {}),
+    "scout_land": ("scout", "scout", {}),
+    "scout_return": ("scout", "scout", {"home": [0.3, 1.0, 0.85]}),
 }
 
 
@@ -174,6 +177,11 @@ def world_for(setup):
         mms = world.add_robot("mms", "mms", pose=[0.3, -2.4, 1.5708])
         if setup == "mms_released":  # the right tello let go in its holster: it takes off
             mms.launch_apparatus("holster_right").release_mav()
+        return world
+    if setup == "scout":  # a Tello hovering past the amoeba aperture, the MMS before the wall
+        world = World(scene="collapsed_mockup", seed=3)
+        world.add_robot("mms", "mms", pose=[0.3, -2.4, 1.5708], mavs=False)
+        world.add_robot("tello", "scout", pose=[0.3, 0.4, 0.85, 1.5708])
         return world
     if setup["scene"] is None:
         world = World(seed=3)

@@ -111,7 +111,12 @@ class FlowMount:
 
 @dataclass(frozen=True)
 class CameraMount:
-    """A camera on a URDF link: resolution, vertical FOV (deg), optical rotation in the link."""
+    """A camera on a URDF link: resolution, vertical FOV (deg), optical rotation in the link.
+
+    ``depth_standin``: the frame's rendered depth reaches the onboard interface beside the RGB image of
+    this monocular camera, as the input of a carrier's monocular-depth-network stand-in only
+    (``marsupial.skills.scout.depth``); the camera measures no depth.
+    """
 
     name: str
     link: str
@@ -119,6 +124,7 @@ class CameraMount:
     height: int
     fov_v_deg: float
     R_link_optical: Any = field(default_factory=lambda: OPTICAL_FORWARD)
+    depth_standin: bool = False
 
 
 @dataclass(frozen=True)
@@ -243,9 +249,12 @@ TELLO = QuadrotorSpec(
     ),
     # downward infrared time-of-flight sensor of the vision positioning system
     sonar=SonarMount(half_angle=math.radians(6.0), max_range=6.0, min_range=0.1, offset=(0.0, 0.0, -0.0215)),
-    # 82.6° diagonal lens
+    # 82.6° diagonal lens; the rendered depth of each frame is the scout's depth-network stand-in input (§IV-G)
     cameras=(
-        CameraMount("front_camera", "camera_front", 320, 240, fov_v_from_diagonal(82.6, 320, 240), OPTICAL_FORWARD),
+        CameraMount(
+            "front_camera", "camera_front", 320, 240, fov_v_from_diagonal(82.6, 320, 240), OPTICAL_FORWARD,
+            depth_standin=True,
+        ),
     ),
     sensors=_common_sensors(sonar_rate=25.0, camera_names=("front_camera",), camera_rate=30.0, camera_latency_s=0.1),
     gains=AutopilotGains(attitude_omega=20.0),
@@ -377,7 +386,7 @@ class Quadrotor(Robot):
             intrinsics = Intrinsics(cam.width, cam.height, cam.fov_v_deg)
             camera = Camera(
                 self, cam.name, intrinsics, cfg[cam.name], link=cam.link, R_link_optical=cam.R_link_optical,
-                measures_depth=False,  # monocular RGB cameras
+                measures_depth=cam.depth_standin,  # monocular RGB cameras (see CameraMount.depth_standin)
             )
             self.add_sensor(camera)
 
