@@ -48,7 +48,7 @@ TRUTH_CALLS = frozenset({"pose", "velocity", "link_pose", "mounted_frame", "opti
                          "acceleration", "distance_to", "offset_to", "in_contact", "part_a_pose", "part_b_pose"})
 #: how long each shipped mission runs under the trap (s, simulated): long enough to reach its first skills
 #: of every family (usar_docking's first operator docking is requested at 95 s)
-TRAP_RUN_S = {"usar_docking": 140.0}
+TRAP_RUN_S = {"usar_docking": 140.0, "aperture_scouts": 180.0}
 DEFAULT_TRAP_RUN_S = 25.0
 
 

@@ -376,8 +376,9 @@ class MMS(WheeledRobot):
         """Move the arm toward joint angles ``q`` (6 values, rad; clipped into the joint limits)."""
         self.arm.set_targets(q)
 
+    @simulates_hardware
     def hold_arm(self) -> None:
-        """Hold the arm joints where they are now."""
+        """Hold the arm joints where they are now (the joint controllers latch their own positions)."""
         self.arm.hold()
 
     def arm_positions(self) -> np.ndarray:
@@ -442,6 +443,7 @@ class MMS(WheeledRobot):
         self.held = apparatus
         return True
 
+    @simulates_hardware
     def release(self) -> LaunchingApparatus | None:
         """Let go of the held apparatus and open the fingers; returns what was held.
 
@@ -477,6 +479,7 @@ class MMS(WheeledRobot):
         """The launching apparatuses the MMS was loaded with, left then right."""
         return [h.apparatus for h in self.holsters.values()]
 
+    @simulates_hardware
     def release_scout(self) -> bool:
         """Open the held apparatus's hold on its MAV (the launch command, §IV-F); whether a MAV was let go."""
         if self.held is None or not self.held.mav_secured:
