@@ -50,6 +50,7 @@ from rich.text import Text
 from marsupial.world import World
 from marsupial.world.disturbances import apply_disturbances
 from marsupial.world.errors import UnknownNameError, WorldError
+from marsupial.world.kidnap import spread_pose
 from marsupial.world.scoring import Referee
 from marsupial.world.team_link import TeamLinkConfig
 
@@ -139,7 +140,13 @@ def _add_team(mission: Mission, world: World) -> None:
     """Add the mission's team robots to ``world`` at their poses, with their sensors and options."""
     for name, member in mission.spec.team.items():
         options: dict[str, Any] = dict(member.options)
-        if member.pose is not None:
+        if member.pose_spread is not None:
+            spread = member.pose_spread
+            if member.pose is None or len(spread) != 3 or min(spread) < 0:
+                raise mission.error_at(("team", name, "pose_spread"), f"cannot spread the start pose by {spread}",
+                                       expected="[dx, dy, dyaw] >= 0 (m, m, rad) beside a pose")
+            options["pose"] = list(spread_pose(member.pose, spread, world.rng_for(f"team/{name}/pose")))
+        elif member.pose is not None:
             options["pose"] = member.pose
         if member.sensors:
             options["sensors"] = member.sensors

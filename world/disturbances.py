@@ -10,8 +10,10 @@ installs them::
     frame_drops: {camera: carrier/eye_in_hand, probability: 0.1}
     video_latency: {camera: uav/front_camera, seconds: 0.2}
     kidnap: [{robot: child, at: 12.0, pose: [-1.0, 0.5, 3.14]}]          # moved by hand (Zhao, Exp. II)
+    decoys: [{wall: mockup_wall_1, x: [-2.2, -1.1], z: [0.5, 1.2], recesses: 1, holes: 2}]   # :mod:`.decoys`
 
-Every entry except ``wind`` and ``kidnap`` (an instant, not a window) is on during time windows (simulated seconds,
+Every entry except ``wind``, ``kidnap`` (an instant, not a window) and ``decoys`` (scene geometry, there from the
+start) is on during time windows (simulated seconds,
 :class:`When`): one window ``start`` .. ``start + duration`` (default: from 0
 for ever) or, with ``rate_hz``, a seeded random train of windows of
 ``duration`` s. Every random draw comes from ``world.rng_for("disturbance/…")``,
@@ -32,15 +34,16 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet
 
+from .decoys import DecoySpec, cut_decoys
 from .errors import UnknownNameError, WorldError
-from .kidnap import Kidnap, teleport
+from .kidnap import Kidnap, spread_pose, teleport
 
 if TYPE_CHECKING:
     from .robots.base import Robot
     from .sensors.base import Sensor
     from .world import World
 
-DISTURBANCE_KEYS = ("wind", "occlusion", "frame_drops", "video_latency", "kidnap")
+DISTURBANCE_KEYS = ("wind", "occlusion", "frame_drops", "video_latency", "kidnap", "decoys")
 """Keys of a mission's ``world:`` section that :func:`apply_disturbances` handles."""
 
 _NEVER = sys.maxsize  # physics step of a change that never comes
@@ -304,17 +307,11 @@ class DisturbanceSchedule:
         assert world is not None, "the world owns this schedule: it outlives it"
         label = f"kidnap {robot.name}"
         index = self._kidnaps_of[robot.name] = self._kidnaps_of.get(robot.name, -1) + 1
-        target = [float(v) for v in pose]
-        if any(spread):
-            rng = world.rng_for(f"disturbance/{label}/{index}")
-            dx, dy, dyaw = (rng.uniform(-h, h) for h in spread)
-            target[0] += dx
-            target[1] += dy
-            target[-1] += dyaw
-        self._kidnaps.append(Kidnap(robot, self._clock.steps_for(at), tuple(target)))
+        target = spread_pose(pose, spread, world.rng_for(f"disturbance/{label}/{index}"))
+        self._kidnaps.append(Kidnap(robot, self._clock.steps_for(at), target))
         self._kidnaps.sort(key=lambda k: k.step)
         self.update()
-        return tuple(target)
+        return target
 
     def _add_sensor_effect(self, sensor: Sensor, field: str, what: str, value: float, when: When) -> None:
         key = (what, id(sensor))
@@ -382,7 +379,9 @@ def apply_disturbances(world: World, spec: dict[str, Any], where: str = "world")
 
     ``wind`` replaces ``world.wind`` with a :class:`GustyWind`; ``kidnap``
     entries (``robot``, ``at`` s, ``pose``, optional ``spread``) are
-    :meth:`DisturbanceSchedule.kidnap` calls; the other keys (one entry or a list of entries) go to the world's
+    :meth:`DisturbanceSchedule.kidnap` calls; ``decoys`` entries are cut into the scene's walls at once
+    (:func:`~.decoys.cut_decoys`, entry ``i`` drawing from ``world.rng_for("disturbance/decoys/<i>")``); the
+    other keys (one entry or a list of entries) go to the world's
     :class:`DisturbanceSchedule`, which is returned. Bad input raises
     :class:`WorldError` naming the entry (``where`` prefixes the path, e.g.
     ``world.occlusion[1].start``), the unknown keys or the expected type;
@@ -420,8 +419,12 @@ def apply_disturbances(world: World, spec: dict[str, Any], where: str = "world")
         pose = _numbers(path, "pose", entry["pose"], (3, 4), "[x, y, yaw] or [x, y, z, yaw] (m, rad, world frame)")
         spread = _numbers(path, "spread", entry.get("spread", [0.0, 0.0, 0.0]), (3,), "[dx, dy, dyaw] (m, rad)", 0.0)
         effects.append((DisturbanceSchedule.kidnap, (robot, at, pose, spread)))
+    decoys = [_decoys(world, f"{where}.decoys{i}", entry) for i, entry in _entries(where, "decoys", spec)]
     if wind is not None:
         world.wind = wind
+    numbers: dict[str, int] = {}
+    for index, decoy_spec in enumerate(decoys):
+        cut_decoys(world, decoy_spec, world.rng_for(f"disturbance/decoys/{index}"), numbers)
     schedule = DisturbanceSchedule.of(world)
     for add, args in effects:
         add(schedule, *args)
@@ -519,6 +522,32 @@ def _when(where: str, entry: dict[str, Any]) -> When:
         rate_hz=_positive(where, "rate_hz", entry["rate_hz"]),
         stop=stop,
     )
+
+
+_DECOY_RANGES = ("recess_width", "recess_height", "recess_depth", "hole_size")
+
+
+def _decoys(world: World, where: str, entry: Any) -> DecoySpec:
+    """One ``decoys`` entry (:mod:`.decoys`), checked: the wall exists, counts are whole, ranges increasing."""
+    _check_keys(where, entry, ("wall", "x", "z", "recesses", "holes", "gap", *_DECOY_RANGES),
+                required=("wall", "x", "z"))
+    world.scene.object(_text(where, "wall", entry["wall"]))  # unknown wall: the error lists the objects
+    ranges: dict[str, tuple[float, float]] = {}
+    for key in ("x", "z", *_DECOY_RANGES):
+        if key in entry:
+            low, high = _numbers(where, key, entry[key], (2,), "[low, high] in metres")
+            if not low < high or (key != "x" and key != "z" and low <= 0):
+                raise WorldError(f"{where}.{key}: expected [low, high] with low < high (and > 0 for sizes), "
+                                 f"got {entry[key]!r}")
+            ranges[key] = (low, high)
+    counts = {}
+    for key in ("recesses", "holes"):
+        value = entry.get(key, 0)
+        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+            raise WorldError(f"{where}.{key}: expected a whole number >= 0, got {value!r}")
+        counts[key] = value
+    extra = {"gap": _number(where, "gap", entry["gap"], 0.0)} if "gap" in entry else {}
+    return DecoySpec(entry["wall"], **ranges, **counts, **extra)  # type: ignore[arg-type]
 
 
 def _wind(world: World, where: str, spec: Any) -> GustyWind:

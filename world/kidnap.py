@@ -35,6 +35,18 @@ class Kidnap:
     pose: tuple[float, ...]
 
 
+def spread_pose(pose: Sequence[float], spread: Sequence[float], rng: np.random.Generator) -> tuple[float, ...]:
+    """``pose`` (``[x, y, yaw]`` or ``[x, y, z, yaw]``, m, rad) plus a uniform offset within ±``spread``
+    ``[dx, dy, dyaw]`` (m, m, rad) on x, y and yaw, drawn from ``rng`` (a kidnap's spread, a start pose's)."""
+    target = [float(v) for v in pose]
+    if any(spread):
+        dx, dy, dyaw = (rng.uniform(-h, h) for h in spread)
+        target[0] += dx
+        target[1] += dy
+        target[-1] += dyaw
+    return tuple(target)
+
+
 def teleport(robot: Robot, pose: Sequence[float]) -> None:
     """Put ``robot``'s base at ``pose`` (``[x, y, yaw]`` or ``[x, y, z, yaw]``, world frame) at rest.
 

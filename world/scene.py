@@ -213,6 +213,40 @@ class Scene:
             z for z in self.zones.values() if (tag is None or tag in z.tags) and z.contains(point, margin)
         ]
 
+    # ------------------------------------------------------------- editing
+    def add_box(
+        self, label: str, size: Sequence[float], position: Sequence[float], rgb: Sequence[int] = (160, 160, 160),
+        tags: Sequence[str] = (),
+    ) -> SceneObject:
+        """Add a static axis-aligned box (``size`` and centre ``position`` in m, world frame) labelled ``label``.
+
+        For scene changes made after loading (e.g. :mod:`.decoys`); :class:`WorldError` for a label in use.
+        """
+        if label in self.objects:
+            raise WorldError(f"scene {self.name} already has an object labelled '{label}'")
+        size3 = tuple(float(v) for v in size)
+        geometry = {"shapeType": pybullet.GEOM_BOX, "halfExtents": [v / 2 for v in size3]}
+        rgb_ = tuple(int(v) for v in rgb)
+        orientation = (0.0, 0.0, 0.0, 1.0)
+        centre = tuple(float(v) for v in position)
+        body = _static_body(self.client_id, geometry, geometry, rgb_, centre, orientation)
+        made = SceneObject(label, body, "box", centre, tuple(tags), orientation, size3, rgb_[:3])  # type: ignore[arg-type]
+        self.objects[label] = made
+        return made
+
+    def remove(self, label: str) -> SceneObject:
+        """Remove object ``label`` from the scene and its body from the world; returns it."""
+        obj = self.object(label)
+        pybullet.removeBody(obj.body_id, physicsClientId=self.client_id)
+        del self.objects[label]
+        return obj
+
+    def add_zone(self, zone: Zone) -> None:
+        """Add ``zone``; :class:`WorldError` for a label in use."""
+        if zone.label in self.zones:
+            raise WorldError(f"scene {self.name} already has a zone labelled '{zone.label}'")
+        self.zones[zone.label] = zone
+
     # -------------------------------------------------------------- paths
     def path(self, name: str) -> np.ndarray:
         """Waypoints ``(N, 2)`` (m, world x/y) of the path ``name``; the error lists the paths."""
@@ -432,10 +466,18 @@ def _make_object(world: World, spec: _Fields) -> SceneObject:
     orientation = tuple(pybullet.getQuaternionFromEuler(rpy))
     rgb = spec.rgb((160, 160, 160))
     tags = spec.tags()
+    body = _static_body(cid, geometry, visual_geometry, rgb, position, orientation)
+    return SceneObject(label, body, shape, position, tags, orientation, size, rgb[:3])  # type: ignore[arg-type]
+
+
+def _static_body(
+    cid: int, geometry: dict[str, Any], visual_geometry: dict[str, Any], rgb: Sequence[int],
+    position: Sequence[float], orientation: Sequence[float],
+) -> int:
+    """A static pybullet body with the collision ``geometry`` and the visual one, coloured ``rgb``; its id."""
     collision = pybullet.createCollisionShape(physicsClientId=cid, **geometry)
     visual = pybullet.createVisualShape(rgbaColor=_rgba(rgb), physicsClientId=cid, **visual_geometry)
-    body = pybullet.createMultiBody(0.0, collision, visual, position, orientation, physicsClientId=cid)
-    return SceneObject(label, body, shape, position, tags, orientation, size, rgb[:3])  # type: ignore[arg-type]
+    return int(pybullet.createMultiBody(0.0, collision, visual, position, orientation, physicsClientId=cid))
 
 
 def _make_zone(spec: _Fields) -> Zone:

@@ -68,6 +68,13 @@ class TeamMember(BaseModel):
     pose: list[float] | None = Field(
         None, description="Start pose [x, y], [x, y, yaw] (ground robots) or [x, y, z, yaw] (m, rad, world frame)."
     )
+    pose_spread: list[float] | None = Field(
+        None,
+        description=(
+            "[dx, dy, dyaw] >= 0 (m, m, rad): the start pose is `pose` plus a uniform offset within ± each on x, y "
+            "and yaw, drawn from the world seed (the robot's estimate starts there too)."
+        ),
+    )
     stored_on: str | None = Field(None, description="Team member that carries this robot at the start.")
     sensors: dict[str, Any] = Field(default_factory=dict, description="Sensor configurations by sensor name.")
     options: dict[str, Any] = Field(default_factory=dict, description="Options passed to the robot constructor.")
