@@ -12,9 +12,14 @@ kept when the launch attitude is within α_launch.
 
 What it senses: the camera's depth frames posed by the arm encoders, the arm
 model and the base estimate (:func:`~.scan.fresh_frame`), and the ranking
-``aperture_scan`` wrote. It holds the arm where the approach left it.
+``aperture_scan`` wrote. It holds the arm where the approach left it. Its
+frames also go into the volumetric map M: M was built before the base drove
+to the placement, and the odometry's drift on the way (centimetres) would
+otherwise leave the arm's collision checks against a wall that is not quite
+where the camera now sees it.
 
-Blackboard: reads ``{robot}/apertures``; writes ``{robot}/launch_plans``, the
+Blackboard: reads ``{robot}/apertures`` and ``{robot}/volumetric_map`` (updated in place);
+writes ``{robot}/launch_plans``, the
 feasible :class:`~.launch_pose.LaunchPlan` list, best first. Events: a
 ``state_change`` with phase ``profile`` (the detection's centre, how many
 configurations and feasible plans, the best plan). SUCCESS with at least
@@ -35,8 +40,9 @@ from ..uav_docking.team import phase_event
 from .detection import DepthFrame, DetectionParams, detect_apertures
 from .launch_pose import LaunchParams, plan_launches
 from .profile import ProfileParams, profile_analysis
-from .scan import APERTURES, fresh_frame
+from .scan import APERTURES, VOLUMETRIC_MAP, fresh_frame
 from .silhouette import mav_contour
+from .volumetric import sensor_cloud
 
 LAUNCH_PLANS = "launch_plans"
 """Blackboard key (under the robot's name) of the feasible launch plans, best first."""
@@ -52,13 +58,17 @@ class AnalyzeAperture(Skill["AnalyzeAperture.Params"]):
         """The detection must lie this close (m) to the ranked aperture's centre."""
         clearance_px: float = Field(ProfileParams().clearance_px, ge=0.0)
         """Pixels C_m must keep from C_a in the profile analysis."""
+        stride_px: int = Field(2, ge=1)
+        """Every how many depth pixels of each frame a ray is inserted into M."""
+        max_range: float = Field(4.0, gt=0.0)
+        """Rays inserted into M are truncated at this range (m)."""
         camera: str = "camera"
         """The eye-in-hand RGB-D camera."""
 
     robot_kinds = (HasArmModel,)
     sensors = ("camera",)
     claims = ("arm",)  # held still at the approach's viewing pose while the frames are taken
-    reads = (f"{{robot}}/{APERTURES}",)
+    reads = (f"{{robot}}/{APERTURES}", f"{{robot}}/{VOLUMETRIC_MAP}")
     writes = (f"{{robot}}/{LAUNCH_PLANS}",)
 
     def start(self) -> None:
@@ -78,6 +88,9 @@ class AnalyzeAperture(Skill["AnalyzeAperture.Params"]):
         if taken is not None:
             frame, self.last_stamp = taken
             self.frames.append(frame)
+            occupancy = self.read(f"{self.robot_name}/{VOLUMETRIC_MAP}")
+            if occupancy is not None:  # the structure as seen from here: M was built before the base drove
+                occupancy.insert(sensor_cloud(frame, self.params.stride_px, self.params.max_range))
         if len(self.frames) < self.params.n_frames:
             self.feedback_message = f"collecting depth frames: {len(self.frames)}/{self.params.n_frames}"
             return Status.RUNNING

@@ -126,7 +126,7 @@ def rim_of(plan: LaunchPlan) -> Rim:
     return Rim(plan.rim, np.column_stack((u, np.cross(n, u), n)), plan.pre_launch)
 
 
-def rim_objects(rim: Rim, T_M_nav: np.ndarray, wall_depth: float, band: float = 0.015,
+def rim_objects(rim: Rim, T_M_nav: np.ndarray, wall_depth: float, band: float = 0.04,
                 thickness: float = 0.003, simplify_m: float = 0.002) -> list[fcl.CollisionObject]:
     """The rim as fcl boxes in M: along each edge of C_a, a box ``band`` wide outward from it (plus ``thickness``
     inward), extruded from the plane ``wall_depth`` into the wall (along −n̂)."""
