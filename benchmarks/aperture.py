@@ -23,7 +23,9 @@ page follow the same order):
    ``ranked``) has its centre within 0.1 m of the centre of a real aperture
    (zones tagged ``aperture``), not a decoy (tag ``decoy``). Target: ≥ 95 %,
    reported with its Wilson 95 % interval.
-3. (to come) insertion trials; 4. (to come) the ``aperture_scouts`` mission over seeds.
+3. (to come) insertion trials.
+4. ``mission`` — ``missions/aperture_scouts.yaml`` over ``--seeds`` (10) seeds, both objects found
+   (:mod:`aperture_mission`). Target: ≥ 9/10.
 
 Figures (``docs/results/img/aperture_*.png``): like Fig. 4 (I_binary, I_canny,
 C_a, a valid configuration and a rejected one per shape) and like Fig. 5
@@ -47,6 +49,8 @@ from typing import Any
 
 import cv2
 import numpy as np
+from aperture_mission import mission_lines, mission_seeds
+from aperture_mission import verdict as mission_verdict
 from bench_common import campaign, campaign_arguments, conclude, machine_info, print_tables
 
 from marsupial.skills.aperture import DetectionParams, ProfileParams, detect_apertures, mav_contour, profile_analysis
@@ -82,6 +86,7 @@ CAMERA_AHEAD_M = 1.057  # the camera ahead of the MMS's footprint at LEVEL_POSE
 TARGETS = {
     "table_i": f"Table I: profile analysis ≤ {TABLE_I_TARGET_S} s per shape class (median, one core)",
     "ranking": f"true aperture ranked first in ≥ {RANKING_TARGET:.0%} of randomized scans with decoys",
+    "mission": "aperture_scouts: both objects found in ≥ 9/10 seeds",
 }
 
 
@@ -263,6 +268,7 @@ def verdicts(results: dict[str, Any]) -> dict[str, tuple[bool, str]]:
                     "medians " + " / ".join(f"{r['exact']['median_s'] * 1e3:.1f}" for r in t1["shapes"]) + " ms"),
         "ranking": (rk["rate"] >= RANKING_TARGET,
                     f"{rk['successes']}/{rk['scans']} = {rk['rate']:.1%} (Wilson 95 % {lo:.1%}–{hi:.1%})"),
+        "mission": mission_verdict(results["mission"]),
     }
 
 
@@ -534,6 +540,8 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path) -> None:
         "ranks consistently\" (Fig. 5); no rate is printed. Our mockup has four real apertures, so any of them "
         "ranked first counts.",
         "",
+        *mission_lines(results["mission"]),
+        "",
         "## Reproducing",
         "",
         f"- This page: `{results['command']}`.",
@@ -549,13 +557,15 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Run every section (or read back the scans finished in ``--runs``), write the JSON and the page."""
     parser = campaign_arguments(__doc__.split("\n\n")[0], "6 scans, 5 timing repeats", DEFAULT_OUT, DEFAULT_REPORT)
     parser.add_argument("--scans", type=int, default=None, help="randomized decoy scans (default 50)")
+    parser.add_argument("--seeds", type=int, default=None, help="seeds of the aperture_scouts mission (default 10)")
     parser.add_argument("--repeats", type=int, default=None, help="profile-analysis calls per shape (default 20)")
     args = parser.parse_args(argv)
-    for name in ("scans", "repeats", "workers"):
+    for name in ("scans", "seeds", "repeats", "workers"):
         value = getattr(args, name)
         if value is not None and value < 1:
             parser.error(f"--{name} must be a positive integer, got {value}")
     scans = args.scans or (6 if args.quick else 50)
+    seeds = args.seeds or (2 if args.quick else 10)
     repeats = args.repeats or (5 if args.quick else 20)
     with tempfile.TemporaryDirectory(prefix="aperture_runs_") as scratch:
         runs = args.runs or Path(scratch)
@@ -568,6 +578,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         print_tables([("Table I: profile analysis, one core", TABLE_I_HEADER, table_i_rows(results["table_i"]))],
                      results["machine"])
         results["ranking"] = ranking(runs, scans, args.workers)
+        results["mission"] = mission_seeds(runs, seeds, args.workers)
         img = args.report.parent / "img"
         images = {"fig4": plot_fig4(candidates, img), "fig5": plot_fig5(results["ranking"], img),
                   "starts": plot_starts(results["ranking"], img)}
