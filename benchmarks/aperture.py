@@ -51,7 +51,14 @@ import cv2
 import numpy as np
 from aperture_mission import mission_lines, mission_seeds
 from aperture_mission import verdict as mission_verdict
-from bench_common import campaign, campaign_arguments, conclude, machine_info, print_tables
+from bench_common import (
+    campaign,
+    campaign_arguments,
+    conclude,
+    machine_info,
+    print_tables,
+    targets_lines,
+)
 
 from marsupial.skills.aperture import DetectionParams, ProfileParams, detect_apertures, mav_contour, profile_analysis
 from marsupial.skills.aperture.detection import ApertureCandidate, eye_in_hand_frame
@@ -464,14 +471,7 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path) -> None:
         "The ranking is scored from the runs' MCAP logs against the scene's truth (zones tagged `aperture` and "
         "`decoy`); the robot never reads it.",
         "",
-        "## Targets",
-        "",
-        "| target | measured | met |",
-        "|---|---|---|",
-    ]
-    for key, (ok, text) in verdicts(results).items():
-        lines.append(f"| {TARGETS[key]} | {text} | {'yes' if ok else '**no**'} |")
-    lines += [
+        *targets_lines(TARGETS, verdicts(results)),
         "",
         "## Table I: profile analysis time per shape class",
         "",

@@ -132,6 +132,12 @@ def print_targets(title: str, labels: Mapping[str, str], checks: Mapping[str, tu
     print_tables([(title, ("target", "measured", "met"), rows)], machine)
 
 
+def targets_lines(labels: Mapping[str, str], checks: Mapping[str, tuple[bool, str]]) -> list[str]:
+    """A results page's "Targets" section: a Markdown table of each target's label, what was measured, met."""
+    return ["## Targets", "", "| target | measured | met |", "|---|---|---|",
+            *(f"| {labels[k]} | {text} | {'yes' if ok else '**no**'} |" for k, (ok, text) in checks.items())]
+
+
 def conclude(title: str, labels: Mapping[str, str], checks: Mapping[str, tuple[bool, str]], results: dict[str, Any],
              report: Path, out: Path) -> dict[str, Any]:
     """A benchmark's ending: its targets into ``results`` and printed, the Markdown ``report`` named, the JSON

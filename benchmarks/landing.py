@@ -75,6 +75,7 @@ from bench_common import (  # the module next to this script
     campaign_arguments,
     conclude,
     machine_info,
+    targets_lines,
 )
 
 from marsupial.geometry import heading_rotation, yaw_of
@@ -650,14 +651,7 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path, cycles: 
         "",
         *SEES,
         "",
-        "## Targets",
-        "",
-        "| target | measured | met |",
-        "|---|---|---|",
-    ]
-    for key, (ok, text) in checks.items():
-        lines.append(f"| {TARGETS[key]} | {text} | {'yes' if ok else '**no**'} |")
-    lines += [
+        *targets_lines(TARGETS, checks),
         "",
         "## Life-long operation (§4.2.3, Table 2)",
         "",

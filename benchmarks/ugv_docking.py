@@ -61,7 +61,7 @@ from typing import Any
 import cv2
 import numpy as np
 import ugv_features  # the feature-extraction benchmark next to this script
-from bench_common import campaign, campaign_arguments, conclude, machine_info
+from bench_common import campaign, campaign_arguments, conclude, machine_info, targets_lines
 
 from marsupial.geometry import yaw_of
 from marsupial.skills.ugv_docking.precision import PrecisionParams, analyse
@@ -586,14 +586,7 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path) -> None:
         "",
         *what_was_run(results),
         "",
-        "## Targets",
-        "",
-        "| target | measured | met |",
-        "|---|---|---|",
-    ]
-    for key, (ok, text) in verdicts(results).items():
-        lines.append(f"| {TARGETS[key]} | {text} | {'yes' if ok else '**no**'} |")
-    lines += [
+        *targets_lines(TARGETS, verdicts(results)),
         "",
         "## Experiment III: coordinated against independent docking (Figs. 15–17)",
         "",

@@ -15,24 +15,21 @@ from pathlib import Path
 import numpy as np
 import pybullet
 import pytest
+from mms_frames import facing_frames
 from shapely.geometry import box
 
 from marsupial.skills.aperture import DetectionParams, detect_apertures, mav_contour, profile_analysis
-from marsupial.skills.aperture.detection import eye_in_hand_frame
-from marsupial.skills.aperture.scan import LEVEL_POSE
 from marsupial.trees.mission import load_mission
 from marsupial.trees.runner import build_world
 from marsupial.world import World
 from marsupial.world.apertures import rasterised
 from marsupial.world.disturbances import apply_disturbances
 from marsupial.world.errors import WorldError
-from marsupial.world.onboard import onboard_of
 from marsupial.world.robots.mms import CAMERA_INTRINSICS
 
 ENTRY = {"wall": "mockup_wall_1", "x": [-2.2, -1.1], "z": [0.45, 1.25], "recesses": 1, "holes": 2}
 MISSION = Path(__file__).resolve().parents[1] / "benchmarks" / "missions" / "aperture_ranking.yaml"
 FACE_Y, BACK_Y = -0.05, 0.05  # the wall's faces
-CAMERA_AHEAD_M = 1.057  # camera ahead of the MMS's footprint at LEVEL_POSE
 
 
 def _layout(seed: int, entry: dict = ENTRY) -> list[tuple[str, tuple, tuple]]:
@@ -94,23 +91,6 @@ def test_a_hole_smaller_than_the_mav_gets_no_launch_configuration(seed):
     assert profile_analysis(roomy, c_m)
 
 
-def _frames_facing(world: World, x: float, standoff: float, count: int) -> list:
-    mms = world.add_robot("mms", pose=[x, FACE_Y - standoff - CAMERA_AHEAD_M, math.pi / 2], arm_q=LEVEL_POSE,
-                          mavs=False)
-    onboard = onboard_of(mms)
-    onboard.set_joint_targets(LEVEL_POSE)
-    camera = onboard.sensor("camera")
-    world.step(0.3)
-    frames, last = [], -1.0
-    while len(frames) < count:
-        reading = camera.read()
-        if reading is not None and reading.stamp > last:
-            last = reading.stamp
-            frames.append(eye_in_hand_frame(onboard, reading.data.depth, reading.data.K, onboard.joint_positions()))
-        world.step(1.0 / 30.0)
-    return frames
-
-
 @pytest.mark.parametrize(("depths", "hollow"), [([0.01, 0.04], False), ([0.08, 0.09], True)])
 def test_a_shallow_recess_is_not_a_hollow_candidate_and_a_deep_one_is(depths, hollow):
     entry = {**ENTRY, "holes": 0, "recess_width": [0.25, 0.3], "recess_height": [0.18, 0.22], "recess_depth": depths}
@@ -118,7 +98,7 @@ def test_a_shallow_recess_is_not_a_hollow_candidate_and_a_deep_one_is(depths, ho
         apply_disturbances(world, {"decoys": entry})
         recess = world.scene.zones_tagged("recess")[0]
         params = DetectionParams(n_frames=2)
-        candidates = detect_apertures(_frames_facing(world, float(recess.center[0]), 0.6, 2), params)
+        candidates = detect_apertures(facing_frames(world, float(recess.center[0]), 0.6, 2), params)
     in_recess = [c for c in candidates if recess.contains(c.centre_nav, margin=0.02)]
     assert bool(in_recess) == hollow
     for c in in_recess:

@@ -14,37 +14,21 @@ import math
 
 import numpy as np
 import pytest
+from mms_frames import WALL_FACE_Y, facing_frames
 from shapely.geometry import Polygon
 
 from marsupial.skills.aperture import mav_contour, profile_analysis
-from marsupial.skills.aperture.detection import DetectionParams, detect_apertures, eye_in_hand_frame
+from marsupial.skills.aperture.detection import DetectionParams, detect_apertures
 from marsupial.world import World
 from marsupial.world.apertures import aperture_outline
-from marsupial.world.onboard import onboard_of
 
-ARM_LEVEL = (0.0, 1.15, 0.2, 0.0, 0.221, 0.0)  # camera_link 0.807 m ahead of and 0.40 m above arm_base_link, level
-CAMERA_AHEAD_M = 1.057  # camera ahead of the base centre at ARM_LEVEL (arm_base_link 0.25 m ahead)
-WALL_FACE_Y = -0.05  # the aperture wall's face toward the approach side (0.1 m thick at y = 0)
 STANDOFF_M = 0.6
 
 
 def _frames(x: float, standoff: float, count: int):
     """``count`` posed depth frames of the MMS facing the wall at ``x`` (m) from ``standoff`` (m)."""
     with World(scene="collapsed_mockup", seed=5) as world:
-        mms = world.add_robot("mms", pose=[x, WALL_FACE_Y - standoff - CAMERA_AHEAD_M, math.pi / 2], arm_q=ARM_LEVEL)
-        onboard = onboard_of(mms)
-        onboard.set_joint_targets(ARM_LEVEL)
-        camera = onboard.sensor("camera")
-        world.step(0.3)
-        frames, last = [], -1.0
-        while len(frames) < count:
-            reading = camera.read()
-            if reading is not None and reading.stamp > last:
-                last = reading.stamp
-                image = reading.data
-                frames.append(eye_in_hand_frame(onboard, image.depth, image.K, onboard.joint_positions()))
-            world.step(1.0 / 30.0)
-    return frames
+        return facing_frames(world, x, standoff, count)
 
 
 @pytest.mark.parametrize("shape", ["orthogonal", "collapsed", "amoeba", "u"])
