@@ -164,7 +164,7 @@ class ArmSkill(Skill[ArmSkillParams]):
         extra = stowed_objects([self.holster_frame(h) for h in stowed])
         if plan is not None and len(plan.rim) >= 3:
             rim = rim_of(plan)
-            voxels = voxels_off_the_opening(*voxels, rim, self.params.wall_depth)
+            voxels = voxels_off_the_opening(voxels[0], voxels[1], rim, self.params.wall_depth)
             extra += rim_objects(rim, self.T_M_nav, self.params.wall_depth)
         tool = tool_shapes(with_mav) if with_tool else []
         return environment(self.robot.arm_kinematics, MMS_URDF, self.T_M_nav, voxels, tool, extra)
@@ -240,9 +240,10 @@ class InsertScout(ArmSkill):
         model = self.model(False, False, list(HOLSTERS))
         path = self.free_path(model, q0, self.q_above, "to_holster")
         grasp = self.holster_frame(self.params.holster) @ T_HANDLE_TCP
-        self.descent = cartesian_path(self.ik, line_poses(T_above, grasp), self.q_above)
-        if path is None or self.descent is None:
+        descent = cartesian_path(self.ik, line_poses(T_above, grasp), self.q_above)
+        if path is None or descent is None:
             return self._fail(f"no collision-free path to {self.params.holster}")
+        self.descent: np.ndarray = descent
         self.run(path, False, f"to {self.params.holster}")
         self.stage = "descend"
         return Status.RUNNING

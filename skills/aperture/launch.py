@@ -71,13 +71,19 @@ class LaunchScout(ArmSkill):
             return Status.RUNNING
         return getattr(self, f"_{self.stage}")()
 
+    @property
+    def inserted(self) -> Insertion:
+        """The insertion being launched (present once :meth:`step` has read it)."""
+        assert self.insertion is not None
+        return self.insertion
+
     def _scout_position(self) -> np.ndarray | None:
         message = self.link.latest(self.params.scout)
         return None if message is None else np.asarray(message.payload.position, dtype=float)
 
     def _turn(self) -> Status:
-        phase_event(self, "phase3", roll=round(self.insertion.plan.roll, 4), pitch=round(self.insertion.plan.pitch, 4))
-        self.run(self.insertion.phases.turn, True, "phase III: to the launch attitude")
+        phase_event(self, "phase3", roll=round(self.inserted.plan.roll, 4), pitch=round(self.inserted.plan.pitch, 4))
+        self.run(self.inserted.phases.turn, True, "phase III: to the launch attitude")
         self.stage, self.since = "launch", -1.0
         return Status.RUNNING
 
@@ -104,7 +110,7 @@ class LaunchScout(ArmSkill):
         climbed = -np.inf if position is None else float(position[2] - self.released_at[2])
         if climbed >= self.params.clear_height:
             phase_event(self, "cleared", scout=self.params.scout, climbed=round(climbed, 3))
-            phases = self.insertion.phases
+            phases = self.inserted.phases
             back = np.vstack((phases.turn[::-1], phases.slip[::-1], phases.entry[::-1]))
             self.run(back, True, "retreating through the aperture")
             self.stage = "to_holster"
@@ -116,21 +122,22 @@ class LaunchScout(ArmSkill):
         return Status.RUNNING
 
     def _to_holster(self) -> Status:
-        holster = self.insertion.holster
-        model = self.model(True, False, list(self.insertion.stowed), self.insertion.plan)
-        q_above = self.insertion.above_holster
+        holster = self.inserted.holster
+        model = self.model(True, False, list(self.inserted.stowed), self.inserted.plan)
+        q_above = self.inserted.above_holster
         path = self.free_path(model, self.robot.joint_positions(), q_above, "to_holster")
         grasp = self.holster_frame(holster) @ T_HANDLE_TCP
-        self.descent = cartesian_path(self.ik, line_poses(self.above(holster), grasp), q_above)
-        if path is None or self.descent is None:
+        descent = cartesian_path(self.ik, line_poses(self.above(holster), grasp), q_above)
+        if path is None or descent is None:
             self.feedback_message = f"no collision-free path back to {holster}"
             return Status.FAILURE
+        self.descent: np.ndarray = descent
         self.run(path, False, f"back to {holster}")
         self.stage = "descend"
         return Status.RUNNING
 
     def _descend(self) -> Status:
-        self.run(np.vstack((self.insertion.above_holster, self.descent)), True, "putting the apparatus back")
+        self.run(np.vstack((self.inserted.above_holster, self.descent)), True, "putting the apparatus back")
         self.stage = "let_go"
         return Status.RUNNING
 
@@ -139,14 +146,14 @@ class LaunchScout(ArmSkill):
         if self.robot.gripper_opening() < 0.06:
             self.feedback_message = f"opening the gripper: {self.robot.gripper_opening():.3f} m"
             return Status.RUNNING
-        phase_event(self, "stowed", holster=self.insertion.holster)
-        self.run(np.vstack((self.descent[::-1], self.insertion.above_holster)), True, "lifting off the holster")
+        phase_event(self, "stowed", holster=self.inserted.holster)
+        self.run(np.vstack((self.descent[::-1], self.inserted.above_holster)), True, "lifting off the holster")
         self.stage = "to_view"
         return Status.RUNNING
 
     def _to_view(self) -> Status:
         model = self.model(False, False, list(HOLSTERS))
-        path = self.free_path(model, self.robot.joint_positions(), self.insertion.view_q, "to_view")
+        path = self.free_path(model, self.robot.joint_positions(), self.inserted.view_q, "to_view")
         if path is None:
             self.feedback_message = "no collision-free path back to the viewing pose"
             return Status.FAILURE
@@ -155,5 +162,5 @@ class LaunchScout(ArmSkill):
         return Status.RUNNING
 
     def _done(self) -> Status:
-        self.feedback_message = f"{self.params.scout} launched, the apparatus back in {self.insertion.holster}"
+        self.feedback_message = f"{self.params.scout} launched, the apparatus back in {self.inserted.holster}"
         return Status.SUCCESS
