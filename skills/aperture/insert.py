@@ -274,8 +274,8 @@ class InsertScout(ArmSkill):
             return self._fail("no launch plans (analyze_aperture)")
         p = self.params
         shallow = p.wall_depth + p.clear_back + MAV_HALF_LENGTH_M
+        model = self.model(True, True, self.stowed, plans[0])  # the plans share their aperture's rim
         for tried, plan in enumerate(plans, start=1):
-            model = self.model(True, True, self.stowed, plan)
             T = insertion_goals(plan, self.T_M_nav, shallow, p.standoff).approach  # it does not depend on the depth
             solution = self.ik.solve(T[:3, 3][None], T[:3, :3][None], self.view_q)
             if not solution.valid[0] or not model.free(solution.q[0]):
