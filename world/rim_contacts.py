@@ -75,18 +75,22 @@ class RimContacts:
         """Read this step's contacts with the rim; report the touches that began."""
         if not self.active:
             return
-        cid, parts = self.world.client_id, self._parts()
+        cid = self.world.client_id
+        points = [(wall, label, point) for wall, label in self.walls.items()
+                  for point in pybullet.getContactPoints(bodyA=wall, physicsClientId=cid)]
+        if not points and not self._open:
+            return  # nothing touches the rim (the usual step): the watched parts need not be listed
+        parts = self._parts()
         touching: dict[tuple[int, int, int], tuple[str, str, str, tuple[float, float, float]]] = {}
-        for wall, label in self.walls.items():
-            for point in pybullet.getContactPoints(bodyA=wall, physicsClientId=cid):
-                body, link = point[2], point[4]
-                if body not in parts:
-                    continue
-                carrier, name_of = parts[body]
-                part = name_of(link)
-                if part is None:
-                    continue  # the base or a wheel: driving into the wall is not an insertion contact
-                touching[(wall, body, link)] = (carrier, part, label, tuple(point[6]))
+        for wall, label, point in points:
+            body, link = point[2], point[4]
+            if body not in parts:
+                continue
+            carrier, name_of = parts[body]
+            part = name_of(link)
+            if part is None:
+                continue  # the base or a wheel: driving into the wall is not an insertion contact
+            touching[(wall, body, link)] = (carrier, part, label, tuple(point[6]))
         for key in touching.keys() - self._open:
             carrier, part, label, position = touching[key]
             self.count[carrier] += 1
