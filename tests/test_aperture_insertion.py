@@ -17,6 +17,7 @@ from marsupial.skills.aperture.approach import ApproachAperture
 from marsupial.skills.aperture.insert import InsertScout
 from marsupial.skills.aperture.insertion import Rim, rim_objects, voxels_off_the_opening
 from marsupial.skills.aperture.launch import LaunchScout
+from marsupial.skills.aperture.launch_pose import D_L_M
 from marsupial.skills.aperture.scan import ApertureScan
 from marsupial.skills.aperture.takeoff import ScoutTakeoff
 from marsupial.trees.replay import read_log
@@ -83,7 +84,8 @@ def test_the_mms_slips_a_scout_through_the_aperture_launches_it_and_stows_the_ap
         tello = mms.holsters["holster_right"].mav
         nodes = [harness.node(ApertureScan, "mms"), harness.node(ApproachAperture, "mms"),
                  harness.node(AnalyzeAperture, "mms"), harness.node(InsertScout, "mms", holster="holster_right")]
-        launch = [harness.node(LaunchScout, "mms", scout=tello.name), harness.node(ScoutTakeoff, tello.name)]
+        launch = [harness.node(LaunchScout, "mms", scout=tello.name),
+                  harness.node(ScoutTakeoff, tello.name, carrier="mms")]
         nodes.append(py_trees.composites.Parallel(
             "launch", py_trees.common.ParallelPolicy.SuccessOnAll(synchronise=True), children=launch))
         root = py_trees.composites.Sequence("deploy", memory=True, children=nodes)
@@ -104,6 +106,6 @@ def test_the_mms_slips_a_scout_through_the_aperture_launches_it_and_stows_the_ap
     phases = [e["phase"] for e in log.events_of("state_change") if e.get("node") in arm_nodes and "phase" in e]
     assert phases == ["grasped", "insertion_plan", "phase1", "phase2", "phase3", "launched", "cleared", "stowed"]
     plan = next(e for e in log.events_of("state_change") if e.get("phase") == "insertion_plan")
-    assert 0.16 <= plan["depth"] <= 0.225 and plan["plan"]["feasible"]
+    assert 0.16 <= plan["depth"] <= D_L_M and plan["plan"]["feasible"]
     _, counts = log.metric("rim_contacts", robot="mms")
     assert counts.size and counts[-1] == 0 and not log.events_of("rim_contact")

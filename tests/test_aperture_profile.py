@@ -29,14 +29,23 @@ def _in_wall_plane(contour_px: np.ndarray, origin: np.ndarray) -> Polygon:
 
 
 def test_the_tello_seen_nose_first_is_its_guards_wide_and_its_body_high():
-    outline = Polygon(mav_silhouette())
+    outline = Polygon(mav_silhouette(in_cradle=False))
     u_lo, v_lo, u_hi, v_hi = outline.bounds
     assert u_hi - u_lo == pytest.approx(0.0926, abs=1e-4)  # propeller guards: 2 × (0.0253 + 0.021)
     assert v_hi - v_lo == pytest.approx(0.041, abs=1e-4)  # body height
     assert outline.area < 0.0926 * 0.041  # not a rectangle: the guards are thin
-    scaled = Polygon(mav_contour(DEPTH_M, K))
+    scaled = Polygon(mav_contour(DEPTH_M, K, in_cradle=False))
     assert scaled.area == pytest.approx(outline.area * (K[0, 0] / DEPTH_M) ** 2, rel=1e-9)
-    assert Polygon(mav_contour(DEPTH_M, K, margin_m=0.005)).area > scaled.area
+    assert Polygon(mav_contour(DEPTH_M, K, margin_m=0.005, in_cradle=False)).area > scaled.area
+
+
+def test_in_its_cradle_the_tello_reaches_the_tray_below_it():
+    held = Polygon(mav_silhouette())
+    u_lo, v_lo, u_hi, v_hi = held.bounds
+    assert u_hi - u_lo == pytest.approx(0.0926, abs=1e-4)  # the tray (0.054 m) is narrower than the guards
+    assert v_lo == pytest.approx(-0.0205, abs=1e-4)  # the top of the Tello's body
+    assert v_hi == pytest.approx(0.0275, abs=1e-4)  # the tray's underside: 0.0125 + 0.012 + 0.003 m below the MAV
+    assert held.contains(Polygon(mav_silhouette(in_cradle=False)).buffer(-1e-6))
 
 
 @pytest.mark.parametrize("shape", ["orthogonal", "collapsed", "amoeba", "u"])
@@ -76,7 +85,7 @@ def test_the_sliding_search_finds_the_fit_off_the_midpoint():
     # midpoints in the slot, and tilted chords whose midpoints fall in the box tilt the guards into the walls
     outline = box(0.0, 0.0, 0.5, 0.034).union(box(0.2975, -0.03, 0.3625, 0.045))
     mask, origin = rasterised(outline, PIXEL_M)
-    c_m = mav_contour(DEPTH_M, K)
+    c_m = mav_contour(DEPTH_M, K, in_cradle=False)  # the slot is sized for the Tello's own outline
     valid = profile_analysis(mask, c_m, ProfileParams(n_valid=3))
     assert len(valid) == 3
     for config in valid:

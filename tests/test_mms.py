@@ -54,7 +54,7 @@ def test_tellos_sit_in_the_holsters_with_motors_off():
             assert np.allclose(_rotation(q_tello), _rotation(q_seat), atol=1e-3)
             p_holster, _ = mms.link_pose(holster.link)
             assert apparatus.handle_pose()[0] == pytest.approx(p_holster, abs=1e-3)
-        assert apparatus.length == pytest.approx(0.225, abs=1e-3)
+        assert apparatus.length == pytest.approx(0.30, abs=1e-3)
         with pytest.raises(UnknownNameError, match="holster_left"):
             mms.launch_apparatus("holster_middle")
 

@@ -147,7 +147,7 @@ CASES = {
     "analyze_aperture": ("mms", "mms", {}),
     "insert_scout": ("mms", "mms", {}),
     "launch_scout": ("mms", "mms", {"scout": "mms_tello_1"}),
-    "scout_takeoff": ("mms_released", "mms_tello_1", {}),
+    "scout_takeoff": ("mms_released", "mms_tello_1", {"carrier": "mms"}),
     "scout": ("scout", "scout", {}),
     "scout_land": ("scout", "scout", {}),
     "scout_return": ("scout", "scout", {"home": [0.3, 1.0, 0.85]}),

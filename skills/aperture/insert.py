@@ -21,9 +21,12 @@ controllers (:mod:`.motion`):
 4. *Phase II*: the straight slip along −n̂, as deep as is collision-free up to
    d_l (:func:`~.insertion.insertion_depth`, a named departure).
 
-The launch plans are tried best first; the first whose Phase I, II and III
-all plan is kept. Joint speed limits: ``free_speed`` for free motions,
-``slip_speed`` near the holster and through the aperture ("gently slips").
+The launch plans are tried best first, each from every IK branch of the arm
+at its approach pose (nearest the viewing pose first: the straight segments
+then keep to that branch, and the nearest alone can put the wrist into the
+wall during the slip); the first whose Phase I, II and III all plan is kept.
+Joint speed limits: ``free_speed`` for free motions, ``slip_speed`` near the
+holster and through the aperture ("gently slips").
 
 What it senses: the launch plans of ``analyze_aperture``, the volumetric map
 M of ``aperture_scan``, the arm encoders, the gripper's encoder, the base
@@ -40,6 +43,7 @@ Rim contacts are measured by the referee on truth (:mod:`marsupial.world.rim_con
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,7 +52,6 @@ from pydantic import Field
 
 from marsupial.geometry import rotation_matrix, transform
 from marsupial.trees.skill import NodeParams, Skill
-from marsupial.world.assets import asset_path
 from marsupial.world.capabilities import HasArmModel, HasGripper, HasScoutLauncher
 
 from ..uav_docking.ik_engine import ClosedFormIK
@@ -58,6 +61,7 @@ from .analyze import LAUNCH_PLANS
 from .arm_motion import ArmCollisionModel, ArmPlanParams, plan_arm_path
 from .insertion import (
     HOLSTERS,
+    MMS_URDF,
     T_HANDLE_TCP,
     LaunchPhases,
     cartesian_path,
@@ -79,7 +83,6 @@ INSERTION = "insertion"
 """Blackboard key (under the robot's name) of the executed :class:`Insertion`."""
 HANDLE_WIDTH_M = 0.025  # the handle's width across the fingers (launching_apparatus.urdf)
 MAV_HALF_LENGTH_M = 0.05  # the tello's half-length with its propeller guards (tello.urdf: 0.028 + 0.021 m)
-MMS_URDF = str(asset_path("mms.urdf"))
 
 
 @dataclass(frozen=True)
@@ -116,7 +119,7 @@ class ArmSkillParams(NodeParams):
     """Joint acceleration limit (rad/s²) of every motion (chosen)."""
     tolerance: float = Field(0.01, gt=0.0)
     """Largest joint error (rad) at which a motion has arrived."""
-    max_checks: int = Field(4000, ge=100, le=200000)
+    max_checks: int = Field(15000, ge=100, le=200000)
     """RRT* stops after this many collision checks (deterministic, §IV-F's "collision-free arm planning")."""
     check_resolution: float = Field(0.02, gt=0.001, le=0.1)
     """Joint-space spacing (rad) of the collision checks along a free motion: 0.02 rad moves the apparatus's far
@@ -275,15 +278,27 @@ class InsertScout(ArmSkill):
         p = self.params
         shallow = p.wall_depth + p.clear_back + MAV_HALF_LENGTH_M
         model = self.model(True, True, self.stowed, plans[0])  # the plans share their aperture's rim
+        refused: Counter[str] = Counter()
         for tried, plan in enumerate(plans, start=1):
             T = insertion_goals(plan, self.T_M_nav, shallow, p.standoff).approach  # it does not depend on the depth
-            solution = self.ik.solve(T[:3, 3][None], T[:3, :3][None], self.view_q)
-            if not solution.valid[0] or not model.free(solution.q[0]):
+            branches = self.branches(T)
+            if not branches:
+                refused["approach out of reach"] += 1
                 continue
-            q_approach = solution.q[0]
-            phases = launch_phases(model, self.ik, plan, self.T_M_nav, q_approach, p.standoff, shallow, D_L_M)
-            path = None if phases is None else self.free_path(model, self.q_above, q_approach, f"phase1_{tried}")
-            if phases is None or path is None:
+            phases: LaunchPhases | str = "approach in collision"
+            for q_approach in branches:  # the arm's IK branches at the approach pose, nearest the viewing pose first
+                if not model.free(q_approach):
+                    continue
+                phases = launch_phases(model, self.ik, plan, self.T_M_nav, q_approach, p.standoff, shallow, D_L_M)
+                if isinstance(phases, LaunchPhases):
+                    break
+                phases = f"{phases} blocked"
+            if isinstance(phases, str):
+                refused[phases] += 1
+                continue
+            path = self.free_path(model, self.q_above, phases.entry[0], f"phase1_{tried}")
+            if path is None:
+                refused["no phase I path"] += 1
                 continue
             self.insertion = Insertion(p.holster, tuple(self.stowed), plan, phases, self.q_above, self.view_q,
                                        self.T_M_nav)
@@ -292,7 +307,14 @@ class InsertScout(ArmSkill):
             self.run(path, False, "phase I: to the approach pose")
             self.stage = "enter"
             return Status.RUNNING
-        return self._fail(f"none of {len(plans)} launch plans has collision-free Phases I-III")
+        why = ", ".join(f"{reason} {n}" for reason, n in sorted(refused.items()))
+        return self._fail(f"none of {len(plans)} launch plans has collision-free Phases I-III ({why})")
+
+    def branches(self, T: np.ndarray) -> list[np.ndarray]:
+        """The arm's valid IK solutions (rad) for the tcp pose ``T`` (4×4, M), nearest the viewing pose first."""
+        q, ok = self.ik.candidates(T[:3, 3][None], T[:3, :3][None], self.view_q)
+        valid = q[0][ok[0]]
+        return list(valid[np.argsort(np.sum((valid - self.view_q) ** 2, axis=1))])
 
     def _enter(self) -> Status:
         self.run(self.insertion.phases.entry, True, "phase I: onto the aperture plane")

@@ -41,6 +41,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import cv2
 import fcl
@@ -52,26 +53,38 @@ from marsupial.world.assets import asset_path
 from marsupial.world.kinematics import ArmKinematics
 
 from ..uav_docking.ik_engine import ClosedFormIK
+from ..uav_docking.relative_hold import CarrierFrame
+from ..uav_docking.selection import yaw_of_rotation
 from .arm_motion import ArmCollisionModel, urdf_shapes
 from .launch_pose import LaunchPlan
+from .silhouette import MAV_IN_CRADLE
 
 ARM_LINKS = (*(f"arm_link_{i}" for i in range(1, 7)), "gripper_base", "finger_left", "finger_right")
 """The MMS links that move with the arm (mms.urdf)."""
 FIXED_LINKS = ("base_link", "holster_left", "holster_right", "arm_base_link")
 """The MMS links the arm must keep clear of."""
 HOLSTERS = ("holster_left", "holster_right")
+MMS_URDF = str(asset_path("mms.urdf"))
 
-HANDLE_TO_CRADLE = np.array([0.225, 0.0, 0.0])  # cradle frame in the handle frame (launching_apparatus.urdf)
-SEAT_IN_CRADLE = np.array([0.0, 0.0, -0.009])  # mav_seat in the cradle frame
-TELLO_LANDED_HEIGHT = 0.0215  # the tello's base above the seat when it rests on the tray (m, TELLO spec)
+HANDLE_TO_CRADLE = np.array([0.30, 0.0, 0.0])  # cradle frame in the handle frame (launching_apparatus.urdf)
 GRASP_HEIGHT = 0.005  # tcp above the handle's centre when grasping (m): the finger tips stay clear of the pocket
 
 
 T_HANDLE_TCP = transform((0.0, 0.0, GRASP_HEIGHT), np.diag([-1.0, 1.0, -1.0]))
 """The tcp in the handle frame when grasped: approach axis down onto the handle, closing across its width (y)."""
 T_TCP_HANDLE = np.linalg.inv(T_HANDLE_TCP)
-T_HANDLE_MAV = transform(HANDLE_TO_CRADLE + SEAT_IN_CRADLE + (0.0, 0.0, TELLO_LANDED_HEIGHT), np.eye(3))
+T_HANDLE_MAV = transform(HANDLE_TO_CRADLE + MAV_IN_CRADLE, np.eye(3))
 """The MAV's base frame in the handle frame while it sits in the cradle (body x = the apparatus's x)."""
+
+
+def held_mav_pose(port: Any) -> tuple[np.ndarray, float]:
+    """Where the MAV in the held apparatus is, as the MMS knows it: its position (m) and heading (rad) in the MMS's
+    navigation frame, from the arm's forward kinematics at the encoder angles, the grasp (``T_HANDLE_TCP``), the
+    cradle (``T_HANDLE_MAV``) and the MMS's base estimate (``port``: its onboard interface or command port)."""
+    kinematics = port.arm_kinematics
+    T_M_mav = kinematics.transform(port.joint_positions(), kinematics.tip_link) @ T_TCP_HANDLE @ T_HANDLE_MAV
+    frame = CarrierFrame.of(port)
+    return frame.to_world(T_M_mav[:3, 3]), frame.yaw + yaw_of_rotation(T_M_mav[:3, :3])
 
 
 def tool_shapes(with_mav: bool = True) -> list[tuple[fcl.CollisionGeometry, np.ndarray]]:
@@ -283,21 +296,23 @@ def _checked(model: ArmCollisionModel, ik: ClosedFormIK, T_from: np.ndarray, T_t
 
 def launch_phases(model: ArmCollisionModel, ik: ClosedFormIK, plan: LaunchPlan, T_M_nav: np.ndarray,
                   q_approach: np.ndarray, standoff: float, shallowest: float, deepest: float, step: float = 0.01
-                  ) -> LaunchPhases | None:
+                  ) -> LaunchPhases | str:
     """The straight segments of ``plan`` from the arm at ``q_approach`` (the tcp at the approach pose), with the
-    deepest Phase II within ``[shallowest, deepest]`` (m) for which the whole sequence is collision-free."""
-    depth = deepest
+    deepest Phase II within ``[shallowest, deepest]`` (m) for which the whole sequence is collision-free; if there
+    is none, the name of the segment that refused it (``entry``, or ``slip``/``turn`` at the shallowest depth)."""
+    depth, refused = deepest, "slip"
     while depth >= shallowest - 1e-9:
         goals = insertion_goals(plan, T_M_nav, depth, standoff)
         entry = _checked(model, ik, goals.approach, goals.phase1, q_approach)
         if entry is None:
-            return None
+            return "entry"
         slip = _checked(model, ik, goals.phase1, goals.phase2, entry[-1])
         turn = None if slip is None else _checked(model, ik, goals.phase2, goals.phase3, slip[-1])
         if slip is not None and turn is not None:
             return LaunchPhases(goals, entry, slip, turn)
+        refused = "slip" if slip is None else "turn"
         depth -= step
-    return None
+    return refused
 
 
 def level_insertion_tcp(target: np.ndarray, normal: np.ndarray, offset: float) -> np.ndarray:

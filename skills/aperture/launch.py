@@ -10,8 +10,10 @@ the MAV is ready to takeoff based on an appropriately timed command". Stages:
    MAV go (:meth:`~marsupial.world.onboard.ManipulatorOnboard.release_scout`);
    the MAV's own skill takes off (it senses that it is no longer held);
 3. *clear*: the MMS holds the arm still until the MAV's estimate, as the team
-   link carries it, is ``clear_height`` above where it was at the release
-   (FAILURE after ``clear_timeout``: the MAV did not leave);
+   link carries it, is ``clear_height`` above the cradle's seat as the MMS
+   knows it (:func:`~.insertion.held_mav_pose`, where ``scout_takeoff``
+   restarts the MAV's estimate at the release) (FAILURE after
+   ``clear_timeout``: the MAV did not leave);
 4. *retreat*: back along Phases III, II and the entry in reverse (the same
    checked paths, now without the MAV), RRT* to above the holster the
    apparatus came from, the descent, the fingers open (the apparatus latches
@@ -35,7 +37,7 @@ from pydantic import Field
 
 from ..uav_docking.team import phase_event
 from .insert import INSERTION, ArmSkill, ArmSkillParams, Insertion
-from .insertion import HOLSTERS, T_HANDLE_TCP, cartesian_path, line_poses
+from .insertion import HOLSTERS, T_HANDLE_TCP, cartesian_path, held_mav_pose, line_poses
 from .scan import VOLUMETRIC_MAP
 
 
@@ -48,7 +50,7 @@ class LaunchScout(ArmSkill):
         settle: float = Field(0.5, ge=0.0)
         """Seconds the arm holds still at the launch pose before the release."""
         clear_height: float = Field(0.15, gt=0.0)
-        """The MAV has left once its estimate is this far (m) above its estimate at the release."""
+        """The MAV has left once its estimate is this far (m) above its seat in the cradle at the release."""
         clear_timeout: float = Field(15.0, gt=0.0)
         """Seconds the MAV has to leave before the skill fails."""
 
@@ -94,11 +96,11 @@ class LaunchScout(ArmSkill):
         if self.now - self.since < self.params.settle:
             self.feedback_message = "settling at the launch pose"
             return Status.RUNNING
-        position = self._scout_position()
-        if position is None:
+        if self._scout_position() is None:
             self.feedback_message = f"waiting for {self.params.scout}'s telemetry"
             return Status.RUNNING
         self.robot.release_scout()
+        position, _ = held_mav_pose(self.robot)
         self.released_at = position
         phase_event(self, "launched", scout=self.params.scout, position=[round(float(x), 3) for x in position])
         self.stage, self.since = "clear", self.now

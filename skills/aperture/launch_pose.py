@@ -42,7 +42,7 @@ import numpy as np
 from .detection import ApertureCandidate, FrontoParallelView, InertialFrame
 from .profile import LaunchConfiguration
 
-D_L_M = 0.225  # d_l: handle centre to MAV seat of the launching apparatus (launching_apparatus.urdf), §IV-F
+D_L_M = 0.30  # d_l: handle centre to MAV seat of the launching apparatus (launching_apparatus.urdf), §IV-F
 ALPHA_LAUNCH = math.radians(15.0)  # α_launch (rad), Definition 2: chosen, the paper gives no value
 
 #: the MAV's body axes in the fronto-parallel frame at θ = 0: x along z_fp (into the plane), y = −x_fp (image

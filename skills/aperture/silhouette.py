@@ -13,6 +13,14 @@ holds it with its heading along the boom (``launching_apparatus.urdf``), and
 Phase III of §IV-F only rolls it level afterwards. Seen along body x the
 Tello is 0.0926 m wide (propeller guards) and 0.041 m high.
 
+What passes through the aperture is the MAV *in its cradle*: the cradle's
+tray (0.054 m wide) reaches 7 mm below the Tello and its boom follows it
+through the plane (Phase II slips the MAV at least 0.16 m deep, the boom
+starts 0.034 m behind the MAV). By default the outline is therefore the union
+of the Tello's and the cradle link's collision shapes seen along body x (a
+departure: the paper speaks of the MAV mesh alone, and with the Tello alone
+the profile analysis placed the tray onto the rim).
+
 Frames: the MAV's base frame (x forward, y left, z up, origin at the centre
 of mass) in metres; the outline in image axes (u right, v down, as the
 fronto-parallel view looks along the MAV's x with its z up), metres or pixels.
@@ -31,6 +39,11 @@ from shapely.geometry import MultiPoint, Polygon
 from marsupial.world.assets import asset_path
 
 MAV_URDF = "tello.urdf"  # the micro-scout of §III-B
+APPARATUS_URDF = "launching_apparatus.urdf"  # the cradle that holds it through the aperture
+SEAT_IN_CRADLE = np.array([0.0, 0.0, -0.009])  # mav_seat in the cradle frame (launching_apparatus.urdf)
+TELLO_LANDED_HEIGHT = 0.0215  # the tello's base above the seat when it rests on the tray (m, TELLO spec)
+MAV_IN_CRADLE = SEAT_IN_CRADLE + np.array([0.0, 0.0, TELLO_LANDED_HEIGHT])
+"""The MAV's base frame's origin in the cradle frame while it sits in the cradle (m, same axes)."""
 CIRCLE_SEGMENTS = 32  # vertices of a projected circle
 
 
@@ -71,12 +84,14 @@ def _shape_points(geometry: ET.Element) -> np.ndarray:
 
 
 @cache
-def _collision_points(urdf: str) -> tuple[np.ndarray, ...]:
-    """Each collision primitive of the base link of ``urdf`` as points (m, base frame) spanning its hull."""
+def _collision_points(urdf: str, link_name: str | None = None) -> tuple[np.ndarray, ...]:
+    """Each collision primitive of link ``link_name`` (default: the first, the base link) of ``urdf`` as points
+    (m, link frame) spanning its hull."""
     root = ET.parse(asset_path(urdf)).getroot()
-    link = root.find("link")
-    if link is None:
-        raise ValueError(f"{urdf}: no link")
+    links = [link for link in root.findall("link") if link_name is None or link.attrib.get("name") == link_name]
+    if not links:
+        raise ValueError(f"{urdf}: no link {link_name or ''}".rstrip())
+    link = links[0]
     shapes = []
     for collision in link.findall("collision"):
         origin = collision.find("origin")
@@ -86,17 +101,21 @@ def _collision_points(urdf: str) -> tuple[np.ndarray, ...]:
             raise ValueError(f"{urdf}: a collision without geometry")
         shapes.append(_shape_points(geometry) @ _rpy_matrix(*rpy).T + xyz)
     if not shapes:
-        raise ValueError(f"{urdf}: its base link has no collision geometry")
+        raise ValueError(f"{urdf}: link {link.attrib.get('name')} has no collision geometry")
     return tuple(shapes)
 
 
-def mav_silhouette(urdf: str = MAV_URDF, margin_m: float = 0.0) -> np.ndarray:
+def mav_silhouette(urdf: str = MAV_URDF, margin_m: float = 0.0, in_cradle: bool = True) -> np.ndarray:
     """The MAV's outline seen along its body x (nose first), ``(n, 2)`` metres in image axes about its centre of mass.
 
-    u = -y (the MAV's right), v = -z (down). ``margin_m`` grows the outline by that much all round
-    (e.g. for the apparatus or a safety clearance). Counter-clockwise as shown (u right, v down).
+    u = -y (the MAV's right), v = -z (down). ``in_cradle``: with the launching apparatus's cradle (tray and
+    boom) that holds it through the aperture; ``margin_m`` grows the outline by that much all round (e.g. a
+    safety clearance). Counter-clockwise as shown (u right, v down).
     """
-    polygons = [MultiPoint(np.c_[-p[:, 1], -p[:, 2]]).convex_hull for p in _collision_points(urdf)]
+    parts = list(_collision_points(urdf))
+    if in_cradle:
+        parts += [p - MAV_IN_CRADLE for p in _collision_points(APPARATUS_URDF, "cradle")]
+    polygons = [MultiPoint(np.c_[-p[:, 1], -p[:, 2]]).convex_hull for p in parts]
     outline = shapely.unary_union(polygons)
     if margin_m > 0:
         outline = outline.buffer(margin_m, quad_segs=4)
@@ -105,7 +124,8 @@ def mav_silhouette(urdf: str = MAV_URDF, margin_m: float = 0.0) -> np.ndarray:
     return np.asarray(outline.exterior.coords)[:-1]
 
 
-def mav_contour(plane_depth: float, K: np.ndarray, urdf: str = MAV_URDF, margin_m: float = 0.0) -> np.ndarray:
+def mav_contour(plane_depth: float, K: np.ndarray, urdf: str = MAV_URDF, margin_m: float = 0.0,
+                in_cradle: bool = True) -> np.ndarray:
     """C_m: the MAV's outline (:func:`mav_silhouette`) in pixels of an image with intrinsics ``K`` at ``plane_depth``.
 
     The pinhole scale factor of §IV-B: ``u = f_x x / d``, ``v = f_y y / d`` for an outline fronto-parallel to the
@@ -114,5 +134,5 @@ def mav_contour(plane_depth: float, K: np.ndarray, urdf: str = MAV_URDF, margin_
     """
     if plane_depth <= 0:
         raise ValueError(f"plane depth must be positive, got {plane_depth} m")
-    outline = mav_silhouette(urdf, margin_m)
+    outline = mav_silhouette(urdf, margin_m, in_cradle)
     return outline * np.array([K[0, 0], K[1, 1]]) / plane_depth

@@ -3,12 +3,22 @@
 "The MAV is ready to takeoff based on an appropriately timed command": the
 MMS's ``launch_scout`` opens the apparatus's hold; this skill, on the MAV,
 waits until the MAV senses it is no longer held (its ``docked`` device
-state), starts the motors and climbs ``climb`` metres straight up on its own
-estimate from where it was let go, then hovers (SUCCESS). The climb takes the
-MAV clear of the apparatus's 8 mm lips and of the arm before the arm
-withdraws (``launch_scout`` waits for it on the team link).
+state), restarts its estimate where the MMS knows the cradle's seat to be
+(the hand-over, :func:`~.insertion.held_mav_pose`: arm encoders, grasp,
+cradle, the MMS's base estimate), starts the motors and climbs ``climb``
+metres straight up on its estimate from there, then hovers (SUCCESS). The
+climb takes the MAV clear of the apparatus's 8 mm lips and of the arm before
+the arm withdraws (``launch_scout`` waits for it on the team link).
 
-What it senses: the MAV's docked state and its state estimate. Metres, seconds, the navigation frame.
+The hand-over is needed because a MAV's estimate is held while a device holds
+it (its zero-velocity update): carried by the arm from the holster to beyond
+the aperture, the MAV is 0.4 m higher and 2.5 m further than its estimate at
+the release, so far off that its height filter gates every sonar echo out
+(measured: without it, the Tello's true height swung between 0.4 and 2.8 m
+and one scout left the open-topped corridor over its walls).
+
+What it senses: the MAV's docked state and its state estimate; the MMS's arm encoders and base estimate at the
+release (the same hand-over as ``deploy``'s). Metres, seconds, the navigation frame.
 """
 
 from __future__ import annotations
@@ -18,15 +28,18 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.trees.skill import NodeParams, Skill
-from marsupial.world.capabilities import Rotorcraft
+from marsupial.world.capabilities import HasArmModel, Rotorcraft
 
 from ..uav_docking.team import phase_event
+from .insertion import held_mav_pose
 
 
 class ScoutTakeoff(Skill["ScoutTakeoff.Params"]):
     """Wait for the apparatus to let the MAV go, then climb straight up by ``climb`` and hover."""
 
     class Params(NodeParams):
+        carrier: str
+        """The MMS whose apparatus holds the MAV (its arm and base estimate give the hand-over pose)."""
         climb: float = Field(0.3, gt=0.0, le=3.0)
         """Height (m) to climb above the estimate at the release."""
         speed: float = Field(0.3, gt=0.0, le=1.0)
@@ -38,18 +51,22 @@ class ScoutTakeoff(Skill["ScoutTakeoff.Params"]):
     claims = ("rotors",)
 
     def start(self) -> None:
+        self.carrier = self.member(self.params.carrier)
+        if not self.carrier.provides(HasArmModel):
+            raise ValueError(f"carrier {self.params.carrier!r} of {self.name} has no arm to hand the MAV over")
         self.released_at: np.ndarray | None = None
 
     def step(self) -> Status:
         if self.robot.docked:
             self.feedback_message = "held by the launching apparatus"
             return Status.RUNNING
-        position = self.robot.estimate().position
         if self.released_at is None:
-            self.released_at = position.copy()
+            seat, yaw = held_mav_pose(self.carrier)
+            self.robot.reset_estimate(seat, yaw)
+            self.released_at = seat
             self.robot.set_motors(True)
-            phase_event(self, "released", position=[round(float(x), 3) for x in position])
-        remaining = float(self.released_at[2] + self.params.climb - position[2])
+            phase_event(self, "released", position=[round(float(x), 3) for x in seat])
+        remaining = float(self.released_at[2] + self.params.climb - self.robot.estimate().position[2])
         if remaining <= self.params.tolerance:
             self.robot.hover()
             self.feedback_message = f"{self.params.climb:.2f} m above the release"

@@ -266,8 +266,8 @@ class Camera(Sensor[CameraFrame]):
         gain = 1.0 + self.exposure_std * float(self.rng.standard_normal()) if self.exposure_std > 0 else 1.0
         gains = [g * gain for g in self.white_balance]
         if gains != [1.0, 1.0, 1.0]:
-            # one gain per channel (the stubs do not know the scalar-tuple form)
-            cv2.multiply(rgb, (*gains, 0.0), dst=rgb, dtype=cv2.CV_8U)  # type: ignore[call-overload]
+            # one gain per channel (the stubs of some opencv releases do not know the scalar-tuple form)
+            cv2.multiply(rgb, (*gains, 0.0), dst=rgb, dtype=cv2.CV_8U)  # type: ignore[call-overload, unused-ignore]
         if self.config.noise_std > 0:
             if self._pixel_bank is None:
                 bank = self.rng.standard_normal(rgb.size + NOISE_BANK_SLACK, dtype=np.float32)
