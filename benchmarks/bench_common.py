@@ -9,10 +9,12 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import multiprocessing
 import os
 import platform
 import time
 from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -52,7 +54,7 @@ def campaign_arguments(description: str, quick_help: str, out: Path, report: Pat
 def campaign(mission: str, trials: int, out: Path, overrides: Mapping[str, str] | None = None,
              vary: Mapping[str, Sequence[str]] | None = None, base_seed: int = 0, until: float | None = None,
              workers: int = 1) -> dict[str, Any]:
-    """Run a campaign into ``out`` with every log kept, one seed at a time, reading back the seeds already run.
+    """Run a campaign into ``out`` with every log kept, ``workers`` seeds at a time, reading back those already run.
 
     Each seed is a campaign of its own (``out/seed_<s>``), read back when that folder already holds the
     same plan: mission, seed, ``--set`` overrides, varied values and time
@@ -64,9 +66,17 @@ def campaign(mission: str, trials: int, out: Path, overrides: Mapping[str, str] 
     """
     overrides = {k: str(v) for k, v in (overrides or {}).items()}
     vary = {k: [str(x) for x in v] for k, v in (vary or {}).items()}
+    seeds = list(range(base_seed, base_seed + trials))
+    jobs = [(mission, out / f"seed_{seed}", overrides, vary, seed, until, 1 if len(seeds) > 1 else workers)
+            for seed in seeds]
+    if workers > 1 and len(seeds) > 1:  # one process per seed (each seed's runs then in its own process)
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+            list(pool.map(_campaign_of_one_seed, *zip(*jobs, strict=True)))
+    else:
+        for job in jobs:
+            _campaign_of_one_seed(*job)
     records = []
-    for seed in range(base_seed, base_seed + trials):
-        _campaign_of_one_seed(mission, out / f"seed_{seed}", overrides, vary, seed, until, workers)
+    for seed in seeds:
         records += json.loads((out / f"seed_{seed}" / "trials.json").read_text())
     for index, record in enumerate(records):
         record["trial"] = index

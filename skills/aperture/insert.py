@@ -296,7 +296,7 @@ class InsertScout(ArmSkill):
             if isinstance(phases, str):
                 refused[phases] += 1
                 continue
-            path = self.free_path(model, self.q_above, phases.entry[0], f"phase1_{tried}")
+            path = self.phase1_path(model, phases.entry[0], f"phase1_{tried}")
             if path is None:
                 refused["no phase I path"] += 1
                 continue
@@ -309,6 +309,16 @@ class InsertScout(ArmSkill):
             return Status.RUNNING
         why = ", ".join(f"{reason} {n}" for reason, n in sorted(refused.items()))
         return self._fail(f"none of {len(plans)} launch plans has collision-free Phases I-III ({why})")
+
+    def phase1_path(self, model: ArmCollisionModel, q_approach: np.ndarray, key: str) -> np.ndarray | None:
+        """Phase I's free motion (rad) from above the holster to ``q_approach``: RRT* straight there, else through
+        the viewing pose (the arm came from it; RRT* often finds the two shorter legs where it misses the whole)."""
+        path = self.free_path(model, self.q_above, q_approach, key)
+        if path is not None or not model.free(self.view_q):
+            return path
+        first = self.free_path(model, self.q_above, self.view_q, f"{key}_to_view")
+        second = None if first is None else self.free_path(model, self.view_q, q_approach, f"{key}_from_view")
+        return None if first is None or second is None else np.vstack((first, second[1:]))
 
     def branches(self, T: np.ndarray) -> list[np.ndarray]:
         """The arm's valid IK solutions (rad) for the tcp pose ``T`` (4×4, M), nearest the viewing pose first."""
