@@ -236,3 +236,30 @@ def test_the_operator_recall_flies_the_scout_back_along_its_path(tmp_path):
     assert _at(log, "scout", preemptions[0]["t"])[1] > 1.5  # it had flown up the corridor
     _, xyz = log.poses("scout")
     assert np.hypot(*(xyz[-1, :2] - np.array(START[:2]))) < 0.4 and xyz[-1, 2] < 0.05  # landed at the start
+
+
+STUCK_MISSION = """\
+mission: scout_stuck
+world: {scene: collapsed_mockup, seed: 3}
+team:
+  mms: {robot: mms, pose: [0.3, -2.4, 1.5708], options: {mavs: false}}
+  scout: {robot: tello, pose: [6.88, 6.6, 0.7, 0.0]}   # its nose in the hallway's far right corner
+run: {tick_hz: 10, until: 12}
+tree: {skill: scout, robot: scout, params: {carrier: mms, bias: 0.0}}
+"""
+
+
+def test_a_scout_pressed_against_a_wall_turns_away(tmp_path):
+    # in the corner the walls fill the view near the depth map's floor and the policy keeps saying forward
+    # (§IV-G); the Tello's own estimate does not move, and stuck_time later it turns by unstick_angle
+    path = tmp_path / "stuck.yaml"
+    path.write_text(STUCK_MISSION)
+    run_mission(str(path), log_path=tmp_path / "run.mcap", progress=False)
+    log = read_log(tmp_path / "run.mcap")
+    stuck = [e for e in log.events_of("state_change") if e.get("phase") == "stuck"]
+    assert stuck and stuck[0]["robot"] == "scout" and stuck[0]["moved"] < 0.15
+    assert 3.0 <= stuck[0]["t"] <= 9.0
+    times, _, quats = log.poses("scout", orientation=True)
+    yaw = [2.0 * math.atan2(q[2], q[3]) for q in quats]  # about z, the Tello flies level
+    after = yaw[min(np.searchsorted(times, stuck[0]["t"] + 2.7), len(yaw) - 1)]
+    assert math.remainder(after - yaw[0], math.tau) < -0.5  # turning away, clockwise (bias 0)

@@ -42,7 +42,7 @@ from ..uav_docking.team import phase_event
 from .depth import DepthEstimator
 from .detection import Detection, ObjectDetector
 from .plugins import DEPTH_GROUP, DETECTOR_GROUP, build, resolve
-from .policy import decide, velocity_command
+from .policy import CLOCKWISE, COUNTER_CLOCKWISE, FORWARD, decide, velocity_command
 from .relay import RelayedFrame, VideoReceiver, VideoSender
 
 COMMAND_TOPIC = "scout_command"
@@ -103,6 +103,18 @@ class Scout(Skill["Scout.Params"]):
         """The MAV hovers when the newest command it received is older than this (s)."""
         confirm_frames: int = Field(2, ge=1)
         """Successive relayed frames that must show the object before it counts as found."""
+        height: float | None = Field(0.7, gt=0.0, le=3.0)
+        """Height (m) above the floor the MAV holds on its estimate while it explores (none: the height it had
+        at the start). Launched from the apparatus it starts ≈1.1 m up; the objects stand on the floor and
+        the Tello's camera looks level, so at that height the extinguisher (0.6 m tall) was missed from the
+        hallway's far side (chosen: 0.7 m, the corridor flight of Fig. 5)."""
+        stuck_time: float | None = Field(3.0, gt=0.0)
+        """Seconds of forward commands during which the MAV's estimate moved less than ``stuck_distance``
+        after which it counts as stuck against something and turns away (none: never, as in §IV-G)."""
+        stuck_distance: float = Field(0.15, gt=0.0)
+        """Distance (m) the estimate must move in ``stuck_time`` of forward commands."""
+        unstick_angle: float = Field(1.57, gt=0.0, le=6.3)
+        """Yaw (rad) the stuck MAV turns, in the bias's direction (clockwise when ``bias`` ≥ 0)."""
         breadcrumb_spacing: float = Field(0.25, gt=0.0)
         """Distance (m) between the recorded points of the path (``scout_path``)."""
         depth_estimator: str = "monocular_error_model"
@@ -145,6 +157,9 @@ class Scout(Skill["Scout.Params"]):
         self.started = self.now
         self.seen = 0
         self.path = [self.robot.estimate().position.copy()]
+        self.hold_height = float(self.path[0][2]) if p.height is None else p.height
+        self.forward_since: tuple[float, np.ndarray] | None = None  # when the forward commands began, and where
+        self.unstick_until = -np.inf
         self.write(f"{robot}/{OBJECT_FOUND}", None)
         self.write(f"{robot}/{SCOUT_PATH}", list(self.path))
 
@@ -178,7 +193,8 @@ class Scout(Skill["Scout.Params"]):
             self.robot.hover()
             return
         command: ScoutCommand = message.payload
-        self.robot.command_velocity(command.vx, 0.0, 0.0, command.yaw_rate, frame="body")
+        climb = float(np.clip(self.hold_height - self.robot.estimate().position[2], -0.3, 0.3))
+        self.robot.command_velocity(command.vx, 0.0, climb, command.yaw_rate, frame="body")
 
     def _drop_breadcrumb(self) -> None:
         """Record the estimated position when it lies ``breadcrumb_spacing`` from the last recorded one."""
@@ -197,12 +213,38 @@ class Scout(Skill["Scout.Params"]):
         if self.seen >= p.confirm_frames:
             return self._found(detections[0], frame)
         decision = decide(self.estimator.estimate(frame), p.bias, p.rows)
-        vx, yaw_rate = velocity_command(decision.action, p.forward_speed, p.turn_speed, p.yaw_rate)
-        self.carrier_link.send(COMMAND_TOPIC, ScoutCommand(self.started, vx, yaw_rate, decision.action))
+        action = self._unstuck(decision.action)
+        vx, yaw_rate = velocity_command(action, p.forward_speed, p.turn_speed, p.yaw_rate)
+        self.carrier_link.send(COMMAND_TOPIC, ScoutCommand(self.started, vx, yaw_rate, action))
         columns = ", ".join(f"{c:.2f}" for c in decision.columns)
-        self.feedback_message = (f"action {decision.action} (columns l/c/r {columns}); frames "
+        self.feedback_message = (f"action {action} (columns l/c/r {columns}); frames "
                                  f"{self.receiver.received} received, {self.receiver.lost} lost")
         return Status.RUNNING
+
+    def _unstuck(self, action: str) -> str:
+        """``action``, or a turn in the bias's direction while the MAV gets unstuck: forward commands for
+        ``stuck_time`` that moved its estimate less than ``stuck_distance`` (pressed against something its depth
+        map does not tell from open space) start a turn of ``unstick_angle`` (a ``state_change`` ``stuck``)."""
+        p = self.params
+        if self.now < self.unstick_until:
+            return CLOCKWISE if p.bias >= 0 else COUNTER_CLOCKWISE
+        if action != FORWARD or p.stuck_time is None:
+            self.forward_since = None
+            return action
+        position = self.robot.estimate().position
+        if self.forward_since is None:
+            self.forward_since = (self.now, position.copy())
+            return action
+        since, where = self.forward_since
+        if self.now - since < p.stuck_time:
+            return action
+        moved = float(np.hypot(*(position[:2] - where[:2])))
+        self.forward_since = (self.now, position.copy())
+        if moved >= p.stuck_distance:
+            return action
+        self.unstick_until = self.now + p.unstick_angle / p.yaw_rate
+        phase_event(self, "stuck", moved=round(moved, 3), position=[round(float(c), 3) for c in position])
+        return CLOCKWISE if p.bias >= 0 else COUNTER_CLOCKWISE
 
     def _found(self, detection: Detection, frame: RelayedFrame) -> Status:
         """Record the sighting (blackboard, event, metric) and end the run."""
