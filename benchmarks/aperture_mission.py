@@ -20,6 +20,8 @@ from marsupial.trees.replay import read_log
 MISSION = "aperture_scouts"
 SCOUTS = {"scout_1": "fire_extinguisher", "scout_2": "chair"}
 TARGET_BOTH = 0.9  # both objects found in ≥ 9 of 10 seeds (the issue's acceptance)
+PAPER_SCOUT = {"scout_height": "null", "scout_stuck_time": "null"}
+"""The scouts as §IV-G has them: at their launch height, no stuck rule (the mission's two departures off)."""
 
 
 def score_run(record: dict[str, Any]) -> dict[str, Any]:
@@ -42,16 +44,21 @@ def score_run(record: dict[str, Any]) -> dict[str, Any]:
     return row
 
 
-def mission_seeds(runs: Path, seeds: int, workers: int) -> dict[str, Any]:
-    """``seeds`` runs of the mission (seeds 0 … seeds−1), each scored from its log."""
-    out = runs / "mission"
-    campaign(MISSION, seeds, out, workers=workers)
+def mission_seeds(runs: Path, seeds: int, workers: int, folder: str = "mission",
+                  overrides: dict[str, str] | None = None) -> dict[str, Any]:
+    """``seeds`` runs of the mission (seeds 0 … seeds−1, with ``--set`` ``overrides``), each scored from its log;
+    with the default overrides, also the same seeds with the paper's scout policy (:data:`PAPER_SCOUT`)."""
+    out = runs / folder
+    campaign(MISSION, seeds, out, overrides=overrides, workers=workers)
     rows = [score_run(r) for r in json.loads((out / "trials.json").read_text())]
     both = sum(r["both"] for r in rows)
-    return {"mission": f"missions/{MISSION}.yaml", "seeds": len(rows), "both_found": both,
-            "rate": both / len(rows) if rows else 0.0,
-            "found": {s: sum(r[s]["found"] for r in rows) for s in SCOUTS},
-            "rim_contacts": sum(r["rim_contacts"] for r in rows), "rows": rows}
+    result: dict[str, Any] = {
+        "mission": f"missions/{MISSION}.yaml", "set": overrides or {}, "seeds": len(rows), "both_found": both,
+        "rate": both / len(rows) if rows else 0.0, "found": {s: sum(r[s]["found"] for r in rows) for s in SCOUTS},
+        "rim_contacts": sum(r["rim_contacts"] for r in rows), "rows": rows}
+    if overrides is None:
+        result["paper_scout"] = mission_seeds(runs, seeds, workers, "mission_paper_scout", PAPER_SCOUT)
+    return result
 
 
 def verdict(ms: dict[str, Any]) -> tuple[bool, str]:
@@ -80,4 +87,16 @@ def mission_lines(ms: dict[str, Any]) -> list[str]:
             s = r[scout]
             cells.append(f"found, {s['flight_to_find']} s" if s["found"] else f"**not found** ({s['ended']})")
         lines.append(f"| {r['seed']} | {cells[0]} | {cells[1]} | {r['rim_contacts']} | {r['sim_time']:.0f} |")
+    paper = ms.get("paper_scout")
+    if paper is not None:
+        sets = " ".join(f"--set {k}={v}" for k, v in paper["set"].items())
+        lines += ["", "The same seeds with the scouts as §IV-G has them (`" + sets + "`: at their launch height, "
+                  f"≈1.1 m, and no stuck rule): both objects in **{paper['both_found']}/{paper['seeds']}** seeds "
+                  f"(extinguisher {paper['found']['scout_1']}, chair {paper['found']['scout_2']}); rim contacts "
+                  f"{paper['rim_contacts']}.", "",
+                  "| seed | scout 1 (paper's policy) | scout 2 (paper's policy) |", "|---|---|---|"]
+        for r in paper["rows"]:
+            cells = [f"found, {r[s]['flight_to_find']} s" if r[s]["found"] else f"**not found** ({r[s]['ended']})"
+                     for s in SCOUTS]
+            lines.append(f"| {r['seed']} | {cells[0]} | {cells[1]} |")
     return lines
