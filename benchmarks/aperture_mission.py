@@ -19,6 +19,7 @@ from marsupial.trees.replay import read_log
 
 MISSION = "aperture_scouts"
 SCOUTS = {"scout_1": "fire_extinguisher", "scout_2": "chair"}
+MISSION_HEADING = "## The mission `aperture_scouts` over seeds"
 TARGET_BOTH = 0.9  # both objects found in ≥ 9 of 10 seeds (the issue's acceptance)
 PAPER_SCOUT = {"scout_height": "null", "scout_stuck_time": "null"}
 """The scouts as §IV-G has them: at their launch height, no stuck rule (the mission's two departures off)."""
@@ -71,7 +72,7 @@ def verdict(ms: dict[str, Any]) -> tuple[bool, str]:
 def mission_lines(ms: dict[str, Any]) -> list[str]:
     """The page's section on the mission over seeds."""
     lines = [
-        "## The mission `aperture_scouts` over seeds",
+        MISSION_HEADING,
         "",
         f"{ms['seeds']} seeds of `{ms['mission']}` (default sensing, team link and noise; the world's seed varies "
         "the sensor noise, the odometry and the link's drops). Both objects found in "

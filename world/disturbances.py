@@ -11,9 +11,10 @@ installs them::
     video_latency: {camera: uav/front_camera, seconds: 0.2}
     kidnap: [{robot: child, at: 12.0, pose: [-1.0, 0.5, 3.14]}]          # moved by hand (Zhao, Exp. II)
     decoys: [{wall: mockup_wall_1, x: [-2.2, -1.1], z: [0.5, 1.2], recesses: 1, holes: 2}]   # :mod:`.decoys`
+    aperture_fit: {shape: [orthogonal, u], clearance: [0.01, 0.03]}     # :mod:`.aperture_fit`
 
-Every entry except ``wind``, ``kidnap`` (an instant, not a window) and ``decoys`` (scene geometry, there from the
-start) is on during time windows (simulated seconds,
+Every entry except ``wind``, ``kidnap`` (an instant, not a window), ``decoys`` and ``aperture_fit`` (scene
+geometry, there from the start) is on during time windows (simulated seconds,
 :class:`When`): one window ``start`` .. ``start + duration`` (default: from 0
 for ever) or, with ``rate_hz``, a seeded random train of windows of
 ``duration`` s. Every random draw comes from ``world.rng_for("disturbance/…")``,
@@ -34,6 +35,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet
 
+from .aperture_fit import CLEARANCE_MAX_M, ApertureFit, ApertureFitSpec, check_shapes, fit_aperture
 from .decoys import DecoySpec, cut_decoys
 from .errors import UnknownNameError, WorldError
 from .kidnap import Kidnap, spread_pose, teleport
@@ -43,7 +45,7 @@ if TYPE_CHECKING:
     from .sensors.base import Sensor
     from .world import World
 
-DISTURBANCE_KEYS = ("wind", "occlusion", "frame_drops", "video_latency", "kidnap", "decoys")
+DISTURBANCE_KEYS = ("wind", "occlusion", "frame_drops", "video_latency", "kidnap", "decoys", "aperture_fit")
 """Keys of a mission's ``world:`` section that :func:`apply_disturbances` handles."""
 
 _NEVER = sys.maxsize  # physics step of a change that never comes
@@ -251,6 +253,7 @@ class DisturbanceSchedule:
         self._kidnaps: list[Kidnap] = []  # pending, in time order
         self._kidnaps_of: dict[str, int] = {}  # robot -> kidnaps added (each draws its own seeded stream)
         self.kidnapped: list[tuple[float, str, tuple[float, ...]]] = []  # (time s, robot, pose) of those done
+        self.aperture_fit: ApertureFit | None = None  # the tight aperture of an ``aperture_fit`` entry (truth)
         self._next_step = _NEVER
         world.add_actor(self)
 
@@ -380,7 +383,9 @@ def apply_disturbances(world: World, spec: dict[str, Any], where: str = "world")
     ``wind`` replaces ``world.wind`` with a :class:`GustyWind`; ``kidnap``
     entries (``robot``, ``at`` s, ``pose``, optional ``spread``) are
     :meth:`DisturbanceSchedule.kidnap` calls; ``decoys`` entries are cut into the scene's walls at once
-    (:func:`~.decoys.cut_decoys`, entry ``i`` drawing from ``world.rng_for("disturbance/decoys/<i>")``); the
+    (:func:`~.decoys.cut_decoys`, entry ``i`` drawing from ``world.rng_for("disturbance/decoys/<i>")``); an
+    ``aperture_fit`` entry rebuilds the aperture wall at once (:func:`~.aperture_fit.fit_aperture`, drawing from
+    ``world.rng_for("disturbance/aperture_fit")``; the schedule's ``aperture_fit`` holds what it made); the
     other keys (one entry or a list of entries) go to the world's
     :class:`DisturbanceSchedule`, which is returned. Bad input raises
     :class:`WorldError` naming the entry (``where`` prefixes the path, e.g.
@@ -419,16 +424,34 @@ def apply_disturbances(world: World, spec: dict[str, Any], where: str = "world")
         pose = _numbers(path, "pose", entry["pose"], (3, 4), "[x, y, yaw] or [x, y, z, yaw] (m, rad, world frame)")
         spread = _numbers(path, "spread", entry.get("spread", [0.0, 0.0, 0.0]), (3,), "[dx, dy, dyaw] (m, rad)", 0.0)
         effects.append((DisturbanceSchedule.kidnap, (robot, at, pose, spread)))
-    decoys = [_decoys(world, f"{where}.decoys{i}", entry) for i, entry in _entries(where, "decoys", spec)]
+    decoys, fit = _geometry(world, where, spec)
     if wind is not None:
         world.wind = wind
-    numbers: dict[str, int] = {}
-    for index, decoy_spec in enumerate(decoys):
-        cut_decoys(world, decoy_spec, world.rng_for(f"disturbance/decoys/{index}"), numbers)
+    made = _rebuild(world, decoys, fit)
     schedule = DisturbanceSchedule.of(world)
+    if made is not None:
+        schedule.aperture_fit = made
     for add, args in effects:
         add(schedule, *args)
     return schedule
+
+
+def _geometry(world: World, where: str, spec: dict[str, Any]) -> tuple[list[DecoySpec], ApertureFitSpec | None]:
+    """The scene changes of ``spec``, checked: its ``decoys`` entries and its ``aperture_fit`` entry (not both)."""
+    decoys = [_decoys(world, f"{where}.decoys{i}", entry) for i, entry in _entries(where, "decoys", spec)]
+    fit = _aperture_fit(world, f"{where}.aperture_fit", spec["aperture_fit"]) if "aperture_fit" in spec else None
+    if fit is not None and decoys:
+        raise WorldError(f"{where}: aperture_fit rebuilds the whole aperture wall, decoys cut into one of its boxes: "
+                         "give one or the other")
+    return decoys, fit
+
+
+def _rebuild(world: World, decoys: list[DecoySpec], fit: ApertureFitSpec | None) -> ApertureFit | None:
+    """Make the checked scene changes (:func:`_geometry`), each from its own seeded stream; the tight aperture."""
+    numbers: dict[str, int] = {}
+    for index, decoy_spec in enumerate(decoys):
+        cut_decoys(world, decoy_spec, world.rng_for(f"disturbance/decoys/{index}"), numbers)
+    return fit_aperture(world, fit, world.rng_for("disturbance/aperture_fit")) if fit is not None else None
 
 
 def find_sensor(world: World, path: str) -> Sensor:
@@ -548,6 +571,25 @@ def _decoys(world: World, where: str, entry: Any) -> DecoySpec:
         counts[key] = value
     extra = {"gap": _number(where, "gap", entry["gap"], 0.0)} if "gap" in entry else {}
     return DecoySpec(entry["wall"], **ranges, **counts, **extra)  # type: ignore[arg-type]
+
+
+def _aperture_fit(world: World, where: str, entry: Any) -> ApertureFitSpec:
+    """The ``aperture_fit`` entry (:mod:`.aperture_fit`), checked: known shape classes, clearances in range."""
+    _check_keys(where, entry, ("shape", "clearance"), required=("shape", "clearance"))
+    shape = entry["shape"]
+    shapes = [shape] if isinstance(shape, str) else shape
+    if not isinstance(shapes, list) or not shapes or not all(isinstance(s, str) and s for s in shapes):
+        raise WorldError(f"{where}.shape: expected a shape class (text) or a non-empty list of them, got {shape!r}")
+    check_shapes(world.scene, shapes)  # unknown shape: the error lists the scene's apertures
+    value = entry["clearance"]
+    if isinstance(value, (list, tuple)):
+        low, high = _numbers(where, "clearance", value, (2,), "[low, high] in metres")
+    else:
+        low = high = _number(where, "clearance", value)
+    if not 0.0 < low <= high <= CLEARANCE_MAX_M:
+        raise WorldError(f"{where}.clearance: expected a clearance in metres, or [low, high] with "
+                         f"0 < low <= high <= {CLEARANCE_MAX_M}, got {value!r}")
+    return ApertureFitSpec(tuple(shapes), (low, high))
 
 
 def _wind(world: World, where: str, spec: Any) -> GustyWind:

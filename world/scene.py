@@ -50,6 +50,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pybullet
+import shapely
 import yaml
 
 from .errors import UnknownNameError, WorldError
@@ -60,6 +61,8 @@ if TYPE_CHECKING:
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
 FLOOR_HALF_EXTENT = 200.0  # m: the floor is a 400 m square slab
 FLOOR_THICKNESS = 0.1  # m
+PRISM_MARGIN_M = 1e-4
+"""Collision margin (m) of a prism's convex hull (:meth:`Scene.add_prism`): measured, pybullet's rays miss at 0."""
 
 SHAPES = ("box", "cylinder", "sphere")
 SCENE_KEYS = ("name", "description", "size", "floor", "objects", "zones", "paths")
@@ -234,6 +237,47 @@ class Scene:
         self.objects[label] = made
         return made
 
+    def add_prism(
+        self, label: str, outline: Sequence[Sequence[float]] | np.ndarray, y_range: tuple[float, float],
+        rgb: Sequence[int] = (160, 160, 160), tags: Sequence[str] = (),
+    ) -> SceneObject:
+        """Add a static prism labelled ``label``: the convex polygon ``outline`` (``(n, 2)`` world ``(x, z)``, m)
+        extruded along y over ``y_range`` (m), e.g. a piece of a wall around an opening (:mod:`.aperture_fit`).
+
+        Its collision shape is the convex hull (pybullet convex mesh) with a collision margin of
+        :data:`PRISM_MARGIN_M` instead of pybullet's 1 mm: contacts and rays meet it that much before its faces
+        (at 0 pybullet's ray tests miss a convex hull altogether); ``size`` and ``position`` are its bounding box.
+        :class:`WorldError` for a label in use or an outline that is not a convex polygon of positive area.
+        """
+        if label in self.objects:
+            raise WorldError(f"scene {self.name} already has an object labelled '{label}'")
+        ring = np.asarray(outline, dtype=float).reshape(-1, 2)
+        hull = shapely.Polygon(ring).convex_hull
+        if not isinstance(hull, shapely.Polygon) or hull.area <= 0 or len(ring) != len(hull.exterior.coords) - 1:
+            raise WorldError(f"prism '{label}': the outline must be a convex polygon of positive area, got {ring}")
+        y0, y1 = (float(v) for v in y_range)
+        lo, hi = np.r_[ring.min(axis=0), y0], np.r_[ring.max(axis=0), y1]  # (x, z, y)
+        centre = (float(lo[0] + hi[0]) / 2, (y0 + y1) / 2, float(lo[1] + hi[1]) / 2)
+        vertices = np.array([(x - centre[0], y - centre[1], z - centre[2]) for y in (y0, y1) for x, z in ring])
+        n = len(ring)
+        faces = [(0, i, i + 1) for i in range(1, n - 1)] + [(n, n + i + 1, n + i) for i in range(1, n - 1)]
+        faces += [q for i in range(n) for q in ((i, (i + 1) % n, n + i), ((i + 1) % n, n + (i + 1) % n, n + i))]
+        inside = vertices.mean(axis=0)  # inside the convex prism (its bounding box's centre may lie on a face)
+        corners = vertices[[v for face in faces for v in _outward(vertices, face, inside)]]  # 3 per face, flat shaded
+        a, b, c = corners[0::3], corners[1::3], corners[2::3]
+        normals = np.cross(b - a, c - a)
+        normals = np.repeat(normals / np.linalg.norm(normals, axis=1, keepdims=True), 3, axis=0)
+        visual = {"shapeType": pybullet.GEOM_MESH, "vertices": corners.tolist(), "indices": list(range(len(corners))),
+                  "normals": normals.tolist()}
+        rgb_ = tuple(int(v) for v in rgb)
+        body = _static_body(self.client_id, {"shapeType": pybullet.GEOM_MESH, "vertices": vertices.tolist()}, visual,
+                            rgb_, centre, (0.0, 0.0, 0.0, 1.0))
+        pybullet.changeDynamics(body, -1, collisionMargin=PRISM_MARGIN_M, physicsClientId=self.client_id)
+        size = (float(hi[0] - lo[0]), y1 - y0, float(hi[1] - lo[1]))
+        made = SceneObject(label, body, "prism", centre, tuple(tags), (0.0, 0.0, 0.0, 1.0), size, rgb_[:3])  # type: ignore[arg-type]
+        self.objects[label] = made
+        return made
+
     def remove(self, label: str) -> SceneObject:
         """Remove object ``label`` from the scene and its body from the world; returns it."""
         obj = self.object(label)
@@ -246,6 +290,12 @@ class Scene:
         if zone.label in self.zones:
             raise WorldError(f"scene {self.name} already has a zone labelled '{zone.label}'")
         self.zones[zone.label] = zone
+
+    def remove_zone(self, label: str) -> Zone:
+        """Remove zone ``label`` (the error lists the zones); returns it."""
+        zone = self.zone(label)
+        del self.zones[label]
+        return zone
 
     # -------------------------------------------------------------- paths
     def path(self, name: str) -> np.ndarray:
@@ -478,6 +528,14 @@ def _static_body(
     collision = pybullet.createCollisionShape(physicsClientId=cid, **geometry)
     visual = pybullet.createVisualShape(rgbaColor=_rgba(rgb), physicsClientId=cid, **visual_geometry)
     return int(pybullet.createMultiBody(0.0, collision, visual, position, orientation, physicsClientId=cid))
+
+
+def _outward(vertices: np.ndarray, face: tuple[int, int, int], inside: np.ndarray) -> tuple[int, int, int]:
+    """``face`` of a convex body with ``vertices`` wound counter-clockwise seen from outside (``inside``: a point
+    inside the body)."""
+    a, b, c = vertices[list(face)]
+    outward = float(np.dot(np.cross(b - a, c - a), (a + b + c) / 3.0 - inside)) > 0
+    return face if outward else (face[0], face[2], face[1])
 
 
 def _make_zone(spec: _Fields) -> Zone:
