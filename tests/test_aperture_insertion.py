@@ -51,6 +51,18 @@ def test_the_rim_model_lets_a_body_through_the_opening_and_stops_one_across_its_
     assert not _touches(objects, mav, (0.0, 0.12, 1.05))  # beyond the wall's back face
 
 
+def test_the_rim_closes_convex_corners_and_stays_out_of_the_opening_at_reflex_ones():
+    # an L-shaped opening: 0.3 × 0.1 m along the bottom and 0.1 m wide up the left, its reflex corner at (-0.05, 1.0)
+    uv = np.array([[-0.15, 0.9], [0.15, 0.9], [0.15, 1.0], [-0.05, 1.0], [-0.05, 1.2], [-0.15, 1.2]])
+    contour = np.c_[uv[:, 0], np.full(len(uv), WALL_FRONT_Y), uv[:, 1]]
+    R = np.column_stack(((1.0, 0.0, 0.0), (0.0, 0.0, 1.0), (0.0, -1.0, 0.0)))
+    objects = rim_objects(Rim(contour, R, np.array([-0.1, WALL_FRONT_Y, 0.95])), np.eye(4), wall_depth=0.1)
+    probe = (0.01, 0.02, 0.01)  # a 1 cm probe in the wall's middle
+    assert not _touches(objects, probe, (-0.04, 0.0, 0.99))  # inside, 1 cm from the reflex corner
+    assert _touches(objects, probe, (0.17, 0.0, 1.02))  # off the convex corner (0.15, 1.0), beyond both edges
+    assert _touches(objects, probe, (-0.03, 0.0, 1.02))  # in the wall beside the reflex corner
+
+
 def test_the_voxels_in_the_opening_are_left_to_the_rim():
     rim = _opening()
     centres = np.array([[0.0, 0.0, 1.0], [0.11, 0.0, 1.0], [0.2, 0.0, 1.0], [0.0, 0.0, 1.2], [0.0, -0.5, 1.0]])

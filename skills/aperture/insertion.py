@@ -149,21 +149,28 @@ def rim_objects(rim: Rim, T_M_nav: np.ndarray, wall_depth: float, band: float = 
     if shapely.Polygon(ring).exterior.is_ccw is False:
         ring = ring[::-1]
     objects = []
-    for a, b in zip(ring, np.roll(ring, -1, axis=0), strict=True):
+    width = band + thickness
+    previous, following = np.roll(ring, 1, axis=0), np.roll(ring, -1, axis=0)
+    d_in, d_out = ring - previous, following - ring
+    turn = d_in[:, 0] * d_out[:, 1] - d_in[:, 1] * d_out[:, 0]  # > 0: a convex corner of the opening (ccw ring)
+    for i, (a, b) in enumerate(zip(ring, following, strict=True)):
         edge = b - a
         length = float(np.linalg.norm(edge))
         if length < 1e-6:
             continue
         along = edge / length
         outward = np.array([along[1], -along[0]])  # the ring runs counter-clockwise: outward is to its right
-        width = band + thickness
-        mid = (a + b) / 2.0 + outward * (band - thickness) / 2.0
+        # lengthened by half a width at each convex end, so the corners close; at a reflex corner the boxes
+        # overlap already and a lengthened end would reach into the opening
+        ext_a = width / 2.0 if turn[i] > 0 else 0.0
+        ext_b = width / 2.0 if turn[(i + 1) % len(ring)] > 0 else 0.0
+        mid = (a + b) / 2.0 + along * (ext_b - ext_a) / 2.0 + outward * (band - thickness) / 2.0
         x_nav = rim.R_nav_plane[:, :2] @ along
         y_nav = rim.R_nav_plane[:, :2] @ outward
         z_nav = rim.R_nav_plane[:, 2]
         centre = rim.centre + rim.R_nav_plane[:, :2] @ mid - z_nav * wall_depth / 2.0
         pose = T_M_nav @ transform(centre, np.column_stack((x_nav, y_nav, z_nav)))
-        box = fcl.Box(length + width, width, wall_depth)  # lengthened by a width: the corners close
+        box = fcl.Box(length + ext_a + ext_b, width, wall_depth)
         objects.append(fcl.CollisionObject(box, fcl.Transform(pose[:3, :3], pose[:3, 3])))
     return objects
 
