@@ -18,6 +18,21 @@ from ..uav_docking.trajectory import JointTrajectory, TrajectoryParams, time_joi
 from .arm_motion import densify
 
 RESOLUTION = 0.05  # rad: joint-space spacing of the timed paths (the planner's collision-check resolution)
+MIN_STEP_RAD = 1e-4
+"""Waypoints closer than this (rad, joint-space norm) to the one kept before are dropped: toppra finds no
+parameterisation through two waypoints 1e-8 to 1e-5 rad apart (measured: a level launch plan's Phase III)."""
+
+
+def distinct_waypoints(path: np.ndarray) -> np.ndarray:
+    """``path`` ``(n, dof)`` (rad) without the waypoints within :data:`MIN_STEP_RAD` of the one kept before
+    (the last is kept in their place, so the path still ends at its goal)."""
+    kept = [path[0]]
+    for q in path[1:]:
+        if float(np.linalg.norm(q - kept[-1])) > MIN_STEP_RAD:
+            kept.append(q)
+    if len(kept) > 1:
+        kept[-1] = path[-1]
+    return np.array(kept)
 
 
 class ArmMotion:
@@ -32,7 +47,10 @@ class ArmMotion:
 
     def __init__(self, path: np.ndarray, limits: TrajectoryParams, started: float, label: str):
         self.path = np.asarray(path, dtype=float)
-        self.trajectory: JointTrajectory = time_joint_path(densify(self.path, RESOLUTION), limits)
+        waypoints = distinct_waypoints(densify(self.path, RESOLUTION))
+        if len(waypoints) < 2:  # no motion: hold the goal
+            waypoints = np.vstack((self.path[-1], self.path[-1]))
+        self.trajectory: JointTrajectory = time_joint_path(waypoints, limits)
         self.started = started
         self.label = label
 

@@ -126,11 +126,6 @@ def _toppra(path: toppra.interpolator.AbstractGeometricPath, dof: int, params: T
     )
 
 
-MIN_STEP_RAD = 1e-4
-"""Waypoints closer than this (rad, joint-space norm) to the one before are dropped: toppra finds no
-parameterisation through two waypoints 1e-8 to 1e-5 rad apart (measured: a level launch plan's Phase III)."""
-
-
 def time_joint_path(waypoints: np.ndarray, params: TrajectoryParams = TrajectoryParams()) -> JointTrajectory:
     """The time-optimal motion from rest to rest through ``waypoints`` ``(n, dof)`` (rad), under ``params``' limits.
 
@@ -142,7 +137,7 @@ def time_joint_path(waypoints: np.ndarray, params: TrajectoryParams = Trajectory
     if waypoints.ndim != 2 or waypoints.shape[0] < 2:
         raise ValueError(f"expected (n >= 2, dof) waypoints, got shape {waypoints.shape}")
     steps = np.linalg.norm(np.diff(waypoints, axis=0), axis=1)
-    moves = steps > MIN_STEP_RAD
+    moves = steps > 1e-9
     keep = np.concatenate(([True], moves))
     waypoints, s = waypoints[keep], np.concatenate(([0.0], np.cumsum(steps[moves])))
     if waypoints.shape[0] < 2:
