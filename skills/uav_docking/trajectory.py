@@ -137,9 +137,8 @@ def time_joint_path(waypoints: np.ndarray, params: TrajectoryParams = Trajectory
     if waypoints.ndim != 2 or waypoints.shape[0] < 2:
         raise ValueError(f"expected (n >= 2, dof) waypoints, got shape {waypoints.shape}")
     steps = np.linalg.norm(np.diff(waypoints, axis=0), axis=1)
-    moves = steps > 1e-9
-    keep = np.concatenate(([True], moves))
-    waypoints, s = waypoints[keep], np.concatenate(([0.0], np.cumsum(steps[moves])))
+    keep = np.concatenate(([True], steps > 1e-9))
+    waypoints, s = waypoints[keep], np.concatenate(([0.0], np.cumsum(steps[steps > 1e-9])))
     if waypoints.shape[0] < 2:
         return JointTrajectory(waypoints[0], waypoints[0], None)
     timed = _toppra(toppra.SplineInterpolator(s / s[-1], waypoints), waypoints.shape[1], params).compute_trajectory(
