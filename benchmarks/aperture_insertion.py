@@ -131,7 +131,7 @@ def score_trial(record: dict[str, Any], shape: str) -> dict[str, Any]:
 
 
 NO_PLAN = re.compile(r"(insert_scout: none of )\d+( launch plans has collision-free Phases I-III) \((.*)\)")
-"""``insert_scout``'s failure with its tally of why each plan was refused (``entry blocked 10, …``)."""
+"""``insert_scout``'s failure with its tally of why each plan was refused (``entry mav: rim 10, …``)."""
 
 
 def reasons_of(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:

@@ -46,10 +46,10 @@ def test_a_carried_shape_collides_with_the_map(kinematics):
     shifted = centres + (0.0, 0.0, 0.30)  # the block 30 cm above the tool's path
     bare = ArmCollisionModel(kinematics, URDF, ARM_LINKS, FIXED_LINKS, obstacles=(shifted, edges))
     tall = ArmCollisionModel(kinematics, URDF, ARM_LINKS, FIXED_LINKS, obstacles=(shifted, edges),
-                             tool=[(fcl.Box(0.6, 0.05, 0.05), np.eye(4))])  # a 0.6 m boom along the tcp x (up here)
+                             tool=[(fcl.Box(0.6, 0.05, 0.05), np.eye(4), "boom")])  # 0.6 m along the tcp x (up here)
     q = np.array([0.0, 0.6, 0.8, 0.0, 0.5, 0.0])
     assert bare.free(q) and not tall.free(q)
-    assert "tcp: map" in tall.contacts(q)
+    assert "boom: map" in tall.contacts(q)
 
 
 def test_rrt_star_goes_round_a_block_in_the_way_and_toppra_times_the_path(kinematics):

@@ -163,8 +163,9 @@ def test_the_phase_i_goal_lies_d_l_in_front_of_the_aperture_along_its_normal():
 
 def test_an_over_tilted_launch_is_rejected():
     view, frame = _view(np.array([0.0, 0.0, -1.0]))
-    params = LaunchParams()
-    steep = plan_launch(_config(CX, CY, 1.0), view, frame, params)  # 57° roll: more than Phase III can level
+    params = LaunchParams(max_level_roll=math.radians(20.0))
+    steep = plan_launch(_config(CX, CY, 1.0), view, frame, params)  # 57° roll: more than a 20° turn can level
+    assert plan_launch(_config(CX, CY, 1.0), view, frame).feasible  # the default turn levels any fit
     assert not steep.feasible
     assert abs(steep.roll) == pytest.approx(1.0 - params.max_level_roll) and abs(steep.roll) > params.alpha_launch
     tilt = math.radians(30.0)  # a plane leaning back 30°: the MAV would launch pitched 30°

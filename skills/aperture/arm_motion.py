@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -57,11 +57,18 @@ class Shape:
         link: the link (frame of the arm model) it moves with.
         geometry: the fcl geometry (box, cylinder along z, sphere).
         T_link_shape: 4×4 pose of the shape in the link frame.
+        name: what :meth:`ArmCollisionModel.contacts` calls it (default: the link's name).
     """
 
     link: str
     geometry: fcl.CollisionGeometry
     T_link_shape: np.ndarray
+    name: str = ""
+
+    @property
+    def label(self) -> str:
+        """The shape's name, else its link's."""
+        return self.name or self.link
 
 
 def _transform(xyz: Sequence[float], rpy: Sequence[float]) -> np.ndarray:
@@ -137,17 +144,18 @@ class ArmCollisionModel:
         urdf: the robot's URDF (collision elements of the arm's links and of ``fixed_links``).
         arm_links: the moving links (their shapes move with ``q``).
         fixed_links: links that do not move with the arm (base, holsters), in M.
-        tool: shapes carried by the tool, ``(geometry, T_tcp_shape)`` pairs in the kinematics' tip frame.
+        tool: shapes carried by the tool, ``(geometry, T_tcp_shape, name)`` in the kinematics' tip frame.
         obstacles: occupied voxels in M: ``(centres (n, 3), edges (n,))`` (m).
-        extra: further fixed fcl objects in M (e.g. an aperture's rim, stowed apparatuses).
+        extra: further fixed fcl objects in M by what they are (e.g. ``"rim"``, ``"stowed apparatus"``).
     """
 
     def __init__(self, kinematics: ArmKinematics, urdf: str | Path, arm_links: Sequence[str],
-                 fixed_links: Sequence[str] = (), tool: Sequence[tuple[fcl.CollisionGeometry, np.ndarray]] = (),
-                 obstacles: tuple[np.ndarray, np.ndarray] | None = None, extra: Sequence[fcl.CollisionObject] = ()):
+                 fixed_links: Sequence[str] = (), tool: Sequence[tuple[fcl.CollisionGeometry, np.ndarray, str]] = (),
+                 obstacles: tuple[np.ndarray, np.ndarray] | None = None,
+                 extra: Mapping[str, Sequence[fcl.CollisionObject]] | None = None):
         self.kinematics = kinematics
         shapes = urdf_shapes(urdf, list(arm_links))
-        shapes += [Shape(kinematics.tip_link, g, np.asarray(T, dtype=float)) for g, T in tool]
+        shapes += [Shape(kinematics.tip_link, g, np.asarray(T, dtype=float), name) for g, T, name in tool]
         self.shapes = shapes
         self.frames = sorted({s.link for s in shapes})
         self._frame_of = [self.frames.index(s.link) for s in shapes]
@@ -162,7 +170,10 @@ class ArmCollisionModel:
         self.arm.registerObjects(self.objects)
         self.arm.setup()
         centres, edges = obstacles if obstacles is not None else (np.zeros((0, 3)), np.zeros(0))
-        self.environment = voxel_manager(centres, edges, extra) if len(centres) or extra else None
+        self.extra = dict(extra or {})
+        every_extra = [obj for objects in self.extra.values() for obj in objects]
+        self.voxels = voxel_manager(centres, edges) if len(centres) else None
+        self.environment = voxel_manager(centres, edges, every_extra) if len(centres) or every_extra else None
         self.checks = 0
 
     def _pose(self, q: np.ndarray) -> None:
@@ -182,19 +193,22 @@ class ArmCollisionModel:
         return bool(data.result.is_collision)
 
     def contacts(self, q: np.ndarray) -> list[str]:
-        """What the arm at ``q`` (rad) touches: ``"<link>: map"``, ``"<link>: robot"``, ``"<link>: <link>"``."""
+        """What the arm at ``q`` (rad) touches: ``"<shape>: map"`` (a voxel), ``"<shape>: <extra>"`` (e.g. rim),
+        ``"<shape>: robot"``, ``"<shape>: <shape>"``; shapes by :attr:`Shape.label`."""
         self._pose(q)
         request = _request()
         found = []
         for a, obj in enumerate(self.objects):
-            if self.environment is not None:
+            if self.voxels is not None:
                 data = fcl.CollisionData(request=_request())
-                self.environment.collide(obj, data, fcl.defaultCollisionCallback)
+                self.voxels.collide(obj, data, fcl.defaultCollisionCallback)
                 if data.result.is_collision:
-                    found.append(f"{self.shapes[a].link}: map")
-        found += [f"{self.shapes[a].link}: robot" for a, f in self.fixed_pairs
+                    found.append(f"{self.shapes[a].label}: map")
+            found += [f"{self.shapes[a].label}: {name}" for name, objects in self.extra.items()
+                      if any(fcl.collide(obj, other, request, fcl.CollisionResult()) for other in objects)]
+        found += [f"{self.shapes[a].label}: robot" for a, f in self.fixed_pairs
                   if fcl.collide(self.objects[a], f, request, fcl.CollisionResult())]
-        found += [f"{self.shapes[a].link}: {self.shapes[b].link}" for a, b in self.pairs
+        found += [f"{self.shapes[a].label}: {self.shapes[b].label}" for a, b in self.pairs
                   if fcl.collide(self.objects[a], self.objects[b], request, fcl.CollisionResult())]
         return sorted(set(found))
 

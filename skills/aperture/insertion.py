@@ -39,7 +39,7 @@ Metres, radians.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -87,13 +87,14 @@ def held_mav_pose(port: Any) -> tuple[np.ndarray, float]:
     return frame.to_world(T_M_mav[:3, 3]), frame.yaw + yaw_of_rotation(T_M_mav[:3, :3])
 
 
-def tool_shapes(with_mav: bool = True) -> list[tuple[fcl.CollisionGeometry, np.ndarray]]:
-    """The held apparatus (and its MAV) as fcl shapes in the tcp frame, from their URDFs' collision elements."""
+def tool_shapes(with_mav: bool = True) -> list[tuple[fcl.CollisionGeometry, np.ndarray, str]]:
+    """The held apparatus (and its MAV) as fcl shapes in the tcp frame, from their URDFs' collision elements, each
+    named ``apparatus <link>`` or ``mav``."""
     T_handle = {"handle": np.eye(4), "cradle": transform(HANDLE_TO_CRADLE, np.eye(3))}
-    shapes = [(s.geometry, T_TCP_HANDLE @ T_handle[s.link] @ s.T_link_shape)
+    shapes = [(s.geometry, T_TCP_HANDLE @ T_handle[s.link] @ s.T_link_shape, f"apparatus {s.link}")
               for s in urdf_shapes(asset_path("launching_apparatus.urdf"), list(T_handle))]
     if with_mav:
-        shapes += [(s.geometry, T_TCP_HANDLE @ T_HANDLE_MAV @ s.T_link_shape)
+        shapes += [(s.geometry, T_TCP_HANDLE @ T_HANDLE_MAV @ s.T_link_shape, "mav")
                    for s in urdf_shapes(asset_path("tello.urdf"), ["base_link"])]
     return shapes
 
@@ -102,7 +103,7 @@ def stowed_objects(T_M_holsters: Sequence[np.ndarray]) -> list[fcl.CollisionObje
     """fcl objects (in M) of a stowed apparatus and its MAV in each holster frame of ``T_M_holsters``."""
     objects = []
     for T_M_handle in T_M_holsters:
-        for geometry, T_tcp_shape in tool_shapes():
+        for geometry, T_tcp_shape, _ in tool_shapes():
             pose = T_M_handle @ T_HANDLE_TCP @ T_tcp_shape
             objects.append(fcl.CollisionObject(geometry, fcl.Transform(pose[:3, :3], pose[:3, 3])))
     return objects
@@ -194,9 +195,10 @@ def voxels_off_the_opening(centres: np.ndarray, edges: np.ndarray, rim: Rim, wal
 
 
 def environment(kinematics: ArmKinematics, urdf: str, T_M_nav: np.ndarray, voxels: tuple[np.ndarray, np.ndarray],
-                tool: Sequence[tuple[fcl.CollisionGeometry, np.ndarray]], extra: Sequence[fcl.CollisionObject]
-                ) -> ArmCollisionModel:
-    """The arm's collision model with ``tool`` carried, against ``voxels`` (nav) and ``extra`` objects (M)."""
+                tool: Sequence[tuple[fcl.CollisionGeometry, np.ndarray, str]],
+                extra: Mapping[str, Sequence[fcl.CollisionObject]]) -> ArmCollisionModel:
+    """The arm's collision model with ``tool`` carried, against ``voxels`` (nav) and ``extra`` objects (M, by what
+    they are)."""
     centres, edges = voxels
     centres_M = (np.c_[centres, np.ones(len(centres))] @ T_M_nav.T)[:, :3] if len(centres) else centres
     return ArmCollisionModel(kinematics, urdf, ARM_LINKS, FIXED_LINKS, tool=tool, obstacles=(centres_M, edges),
@@ -292,12 +294,15 @@ class LaunchPhases:
 
 
 def _checked(model: ArmCollisionModel, ik: ClosedFormIK, T_from: np.ndarray, T_to: np.ndarray, q_from: np.ndarray
-             ) -> np.ndarray | None:
-    """The straight tcp segment ``T_from`` → ``T_to`` in joint space from ``q_from``, with ``q_from``; ``None`` if
-    it is unreachable or touches anything."""
+             ) -> np.ndarray | str:
+    """The straight tcp segment ``T_from`` → ``T_to`` in joint space from ``q_from``, with ``q_from``; if it is
+    unreachable or touches anything, why (``out of reach``, or the first contacts, ArmCollisionModel.contacts)."""
     path = cartesian_path(ik, line_poses(T_from, T_to), q_from)
-    if path is None or not all(model.free(q) for q in path):
-        return None
+    if path is None:
+        return "out of reach"
+    for q in path:
+        if not model.free(q):
+            return " & ".join(model.contacts(q)) or "joint limits"
     return np.vstack((q_from, path))
 
 
@@ -306,18 +311,18 @@ def launch_phases(model: ArmCollisionModel, ik: ClosedFormIK, plan: LaunchPlan, 
                   ) -> LaunchPhases | str:
     """The straight segments of ``plan`` from the arm at ``q_approach`` (the tcp at the approach pose), with the
     deepest Phase II within ``[shallowest, deepest]`` (m) for which the whole sequence is collision-free; if there
-    is none, the name of the segment that refused it (``entry``, or ``slip``/``turn`` at the shallowest depth)."""
+    is none, which segment refused it and why (``entry …``, or ``slip …``/``turn …`` at the shallowest depth)."""
     depth, refused = deepest, "slip"
     while depth >= shallowest - 1e-9:
         goals = insertion_goals(plan, T_M_nav, depth, standoff)
         entry = _checked(model, ik, goals.approach, goals.phase1, q_approach)
-        if entry is None:
-            return "entry"
+        if isinstance(entry, str):
+            return f"entry {entry}"
         slip = _checked(model, ik, goals.phase1, goals.phase2, entry[-1])
-        turn = None if slip is None else _checked(model, ik, goals.phase2, goals.phase3, slip[-1])
-        if slip is not None and turn is not None:
+        turn = slip if isinstance(slip, str) else _checked(model, ik, goals.phase2, goals.phase3, slip[-1])
+        if not isinstance(slip, str) and not isinstance(turn, str):
             return LaunchPhases(goals, entry, slip, turn)
-        refused = "slip" if slip is None else "turn"
+        refused = f"slip {slip}" if isinstance(slip, str) else f"turn {turn}"
         depth -= step
     return refused
 

@@ -47,6 +47,7 @@ z = ``ground_z``.
 from __future__ import annotations
 
 import math
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -309,7 +310,8 @@ def placement_cost(poses: np.ndarray, q: np.ndarray, start: np.ndarray, q_ref: n
 def plan_placements(target: np.ndarray, normal: np.ndarray, occupancy: VolumetricMap, kinematics: Any,
                     camera: CameraModel, arm_mount: tuple[np.ndarray, np.ndarray], start: Sequence[float],
                     q_ref: np.ndarray, ground_z: float, rng: np.random.Generator,
-                    params: PlacementParams | None = None, tool_goals: Sequence[np.ndarray] = ()) -> list[Placement]:
+                    params: PlacementParams | None = None, tool_goals: Sequence[np.ndarray] = (),
+                    refused: Counter[str] | None = None) -> list[Placement]:
     """Feasible base placements to see and reach the aperture at ``target`` (§IV-D), lowest cost first.
 
     Args:
@@ -326,16 +328,21 @@ def plan_placements(target: np.ndarray, normal: np.ndarray, occupancy: Volumetri
         params: :class:`PlacementParams`.
         tool_goals: tip-frame poses (4×4, nav) the arm must also reach by IK from the placement (the insertion
             through the aperture: "the mounted arm workspace reaches the aperture").
+        refused: if given, counts why candidates were dropped, by the first check each failed (``sight blocked``
+            for all of them, ``footprint blocked``, ``camera out of reach``, ``insertion out of reach``,
+            ``camera off its goal``, ``aperture out of view``).
 
     Returns:
         :class:`Placement` s (empty when the cone is blocked, unreachable, or the camera's sight is blocked).
     """
     params = params or PlacementParams()
+    refused = Counter() if refused is None else refused
     target = np.asarray(target, dtype=float)
     start_pose = np.asarray(start, dtype=float)
     q_ref = np.asarray(q_ref, dtype=float)
     p_opt, R_opt = camera_goal(target, normal, params.standoff)
     if not sight_clear(occupancy, p_opt, target, keep_out=2.0 * occupancy.resolution):
+        refused["sight blocked"] += params.samples
         return []
     poses = sample_cone(target, normal, params, rng)
     footprint = Footprint(*(d + params.margin for d in params.footprint))
@@ -344,7 +351,9 @@ def plan_placements(target: np.ndarray, normal: np.ndarray, occupancy: Volumetri
     grid = FootprintGrid(occupancy, target[:2] - reach, target[:2] + reach,
                          (ground_z + params.ground_clearance, ground_z + params.height),
                          footprint_points(start_pose[None], Footprint(*params.footprint), spacing)[0])
-    poses = poses[~grid.collides(footprint_points(poses, footprint, spacing))]
+    clear = ~grid.collides(footprint_points(poses, footprint, spacing))
+    refused["footprint blocked"] += int(np.count_nonzero(~clear))
+    poses = poses[clear]
     if not len(poses):
         return []
     # the camera link's goal in each candidate's M: R_nav_link = R_nav_opt R_link_opt^T, origin behind the offset
@@ -361,13 +370,17 @@ def plan_placements(target: np.ndarray, normal: np.ndarray, occupancy: Volumetri
         assert tip_ik is not None
         tip = tip_ik.solve(np.einsum("nij,nj->ni", R_M_T, T[:3, 3] - p_M), R_M_T @ T[:3, :3], q_ref)
         reaches &= tip.valid
+    refused["camera out of reach"] += int(np.count_nonzero(~solution.valid))
+    refused["insertion out of reach"] += int(np.count_nonzero(solution.valid & ~reaches))
     placements = []
     costs = placement_cost(poses, solution.q, start_pose, q_ref, params)
     for i in np.flatnonzero(solution.valid & reaches):
         reached = _camera_at(kinematics, camera, solution.q[i], p_M[i], R_M[i])
         if reached is None or np.linalg.norm(reached[0] - p_opt) > 1e-4:
+            refused["camera off its goal"] += 1
             continue
         if not in_view(camera, reached[0], reached[1], target, params.view_margin_px):
+            refused["aperture out of view"] += 1
             continue
         placements.append(Placement(poses[i], solution.q[i], reached[0], float(costs[i])))
     return sorted(placements, key=lambda pl: pl.cost)
