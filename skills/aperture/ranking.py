@@ -6,7 +6,8 @@ centres (navigation frame) lie within ``radius`` of each other: an
 is the mean L_a (log-odds, eq. 1) over the voxels of its region that M
 holds free, a voxel the belief never reached counting as the prior 0; the
 tracks are ranked by it, "the most consistent candidate aperture" first.
-Its map point m_A (§IV-D) is the centroid of the region's voxels of highest L_a.
+Its map point m_A (§IV-D) is the voxel of highest L_a in the region (of several tied, the one nearest their
+centroid).
 
 Frames and units: the navigation frame of the base estimate, metres; scores
 in log-odds.
@@ -49,7 +50,8 @@ class RankedAperture:
 
     Attributes:
         score: mean L_a (log-odds) over the free voxels of its region.
-        m_A: the centroid of the region's voxels of highest L_a (nav frame, m), the approach's target (§IV-D).
+        m_A: the region's voxel of highest L_a (nav frame, m; ties: the one nearest their centroid), the approach's
+            target (§IV-D).
         centre_nav: the newest detection's contour centre on the plane (nav frame, m).
         normal_nav: its plane normal n̂ toward the sensor (nav frame).
         detections: windows that detected it.
@@ -94,7 +96,10 @@ def rank_apertures(tracks: list[ApertureTrack], belief: ApertureBelief, occupanc
         voxels = voxels[occupancy.state(voxels) == FREE]
         if len(voxels):
             l_a = np.nan_to_num(belief.log_odds(voxels))  # never updated: the prior, 0
-            score, m_A = float(l_a.mean()), voxels[l_a >= l_a.max() - 1e-6].mean(axis=0)  # centroid of the ties
+            best = voxels[l_a >= l_a.max() - 1e-6]
+            # the tied voxel nearest their centroid: a map point of the see-through region itself (the centroid of
+            # a non-convex opening's voxels, a U's, can lie on the wall)
+            score, m_A = float(l_a.mean()), best[np.argmin(np.linalg.norm(best - best.mean(axis=0), axis=1))]
         else:
             score, m_A = -np.inf, track.centre_nav
         ranked.append(RankedAperture(score, m_A, track.centre_nav, track.candidate.normal_nav, track.detections,
