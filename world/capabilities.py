@@ -54,6 +54,9 @@ class HasBase(Protocol):
     def footprint_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """Estimated pose of ``base_footprint``: position (m), quaternion."""
 
+    def reset_estimate(self, position: Sequence[float], yaw: float) -> None:
+        """Restart the base estimate at ``position`` (m) and ``yaw`` (rad), a correction the robot computed."""
+
 
 @runtime_checkable
 class HasLidar(Protocol):

@@ -218,7 +218,7 @@ class QuadrotorOnboard(BatteryOnboard):
 class WheeledOnboard(Onboard):
     """A wheeled base: drive commands, wheel-encoder speed, drive limits, footprint estimate."""
 
-    commands: ClassVar[Mapping[str, str]] = {"drive": "base", "stop": "base"}
+    commands: ClassVar[Mapping[str, str]] = {"drive": "base", "stop": "base", "reset_estimate": "base"}
     safe_stops: ClassVar[Mapping[str, str]] = {"base": "stop"}
     __slots__ = ()
 
@@ -243,6 +243,11 @@ class WheeledOnboard(Onboard):
         """Estimated pose of ``base_footprint``: position (m), quaternion, in the estimate's frame."""
         estimate = self.estimate()
         return estimate.position, estimate.orientation
+
+    def reset_estimate(self, position: Sequence[float], yaw: float) -> None:
+        """Restart the base estimate at ``position`` (m; x, y used) and ``yaw`` (rad) in its own frame: a correction
+        the robot computed itself (e.g. registering a depth frame against its map), never the simulator's pose."""
+        self._robot.estimator.reset(np.asarray(position, dtype=float), float(yaw))  # type: ignore[attr-defined]
 
     def odometry(self) -> StateEstimate:
         """The wheel odometry's own estimate of ``base_footprint`` (frame ``odom``): smooth, drifting with distance.

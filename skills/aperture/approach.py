@@ -26,14 +26,18 @@ the placement on its estimate (turn toward it, pure pursuit —
 :func:`~marsupial.skills.navigation.pure_pursuit` — then turn to the
 placement's heading), over ground M showed free at the placement only: the
 straight drive there is not checked against M. Then the arm moves to the
-placement's joint angles, the camera looking at m_A from ``standoff``.
+placement's joint angles, the camera looking at m_A from ``standoff``, and
+(``relocalize``) one depth frame from there is registered against the
+surface M kept, correcting the base estimate for the odometry's drift on
+the drive (:mod:`.registration`; the paper's MMS has SLAM for that).
 
 Blackboard: reads ``{robot}/apertures`` (``aperture_scan``'s ranking) and
 ``{robot}/volumetric_map`` (M); writes ``{robot}/placement``, the
 :class:`~.placement.Placement` chosen. Events: a ``state_change`` with phase
-``placement`` (the aperture, the placement, how many were feasible) and
+``placement`` (the aperture, the placement, how many were feasible, why the others were refused) and
 ``ground_look`` (each look pose), ``reached`` (the estimated pose reached, its error from the placement, the
-arm angles). RUNNING while nothing is ranked yet; FAILURE when the ranking is
+arm angles), ``relocalized`` (the correction applied: dx, dy, dyaw, pairs, rms;
+none when the frame did not register). RUNNING while nothing is ranked yet; FAILURE when the ranking is
 empty or no placement is feasible; SUCCESS once base and arm are there. The
 base stops and the arm holds when the skill ends.
 """
@@ -41,6 +45,7 @@ base stops and the arm holds when the skill ends.
 from __future__ import annotations
 
 import math
+from collections import Counter
 
 import numpy as np
 from py_trees.common import Status
@@ -53,6 +58,7 @@ from ..navigation import pure_pursuit
 from ..uav_docking.team import phase_event
 from .insertion import level_insertion_tcp
 from .placement import RHO_M, CameraModel, Placement, PlacementParams, plan_placements
+from .registration import register_planar
 from .scan import APERTURES, VOLUMETRIC_MAP, fresh_frame
 from .volumetric import sensor_cloud
 
@@ -101,6 +107,10 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
         """The placement must also let the arm hold the MAV level this far (m) past the aperture plane and
         ``standoff`` in front of it (the insertion's reach, §IV-D: "the mounted arm workspace reaches the
         aperture"); none: viewing only."""
+        relocalize: bool = True
+        """At the placement, register a depth frame against M and correct the base estimate by it (the paper's
+        SLAM keeps the map and the pose consistent; the wheel odometry alone drifts centimetres on the drive,
+        :mod:`.registration`); false: keep the odometry."""
         camera: str = "camera"
         """The eye-in-hand RGB-D camera."""
 
@@ -115,7 +125,8 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
         self.stage = "look"  # look → plan → drive → turn → arm
         self.looks = [np.array(pose) + np.r_[pan, np.zeros(5)] for pose in self.params.look_poses
                       for pan in self.params.look_pan]
-        self.arrived_at: float | None = None
+        self.arrived_at: float | None = None  # at the present ground-looking pose since
+        self.placed_at: float | None = None  # at the placement, arm at its angles, since
 
     def step(self) -> Status:
         if self.stage == "look":
@@ -147,11 +158,38 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
         if joint_error > p.joint_tolerance:
             self.feedback_message = f"arm to the viewing pose: {joint_error:.3f} rad"
             return Status.RUNNING
-        phase_event(self, "reached", pose=[round(float(x), 3) for x in (*estimate.position[:2], estimate.yaw)],
-                    error_m=round(distance, 3), yaw_error=round(yaw_error, 3),
-                    q=[round(float(x), 3) for x in self.robot.joint_positions()])
+        if self.placed_at is None:
+            phase_event(self, "reached", pose=[round(float(x), 3) for x in (*estimate.position[:2], estimate.yaw)],
+                        error_m=round(distance, 3), yaw_error=round(yaw_error, 3),
+                        q=[round(float(x), 3) for x in self.robot.joint_positions()])
+            self.placed_at = self.now
+            if p.relocalize:
+                self.feedback_message = "at the placement: relocalising against M"
+                return Status.RUNNING
+        if p.relocalize and not self._relocalize():
+            return Status.RUNNING
         self.feedback_message = f"at the placement ({distance:.2f} m, {yaw_error:+.2f} rad off), aperture in view"
         return Status.SUCCESS
+
+    def _relocalize(self) -> bool:
+        """Register one fresh depth frame from the viewing pose against M's surface and correct the base estimate
+        by the result (:mod:`.registration`); False while the frame is awaited."""
+        assert self.placed_at is not None
+        taken = fresh_frame(self.robot, self.params.camera, self.placed_at)
+        if taken is None:
+            return False
+        occupancy = self.read(f"{self.robot_name}/{VOLUMETRIC_MAP}")
+        cloud = sensor_cloud(taken[0], self.params.stride_px, self.params.max_range)
+        returns = cloud.points[np.linalg.norm(cloud.points - cloud.origin, axis=1) < cloud.max_range]
+        estimate = self.robot.estimate()
+        found = register_planar(returns, occupancy.surface, estimate.position)
+        if found is None:
+            phase_event(self, "relocalized", correction=None)
+            return True
+        position, yaw = found.apply(estimate.position, estimate.yaw)
+        self.robot.reset_estimate(position, yaw)
+        phase_event(self, "relocalized", correction=found.summary())
+        return True
 
     def _look(self) -> Status:
         """Move through the ground-looking poses; one new depth frame from each goes into M."""
@@ -200,6 +238,7 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
             return Status.FAILURE
         aperture = ranked[p.rank]
         estimate = self.robot.estimate()
+        refused: Counter[str] = Counter()
         params = PlacementParams(rho=p.rho, half_angle=p.half_angle, samples=p.samples, standoff=p.standoff,
                                  margin=p.margin)
         placements = plan_placements(
@@ -207,11 +246,13 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
             CameraModel.of_port(self.robot.sensor(p.camera)), self.robot.arm_mount(),
             (*estimate.position[:2], estimate.yaw), self.robot.joint_positions(), float(estimate.position[2]),
             self.context.rng(f"{self.name}/placement"), params, self._tool_goals(aperture.m_A, aperture.normal_nav),
+            refused,
         )
         phase_event(self, "placement", aperture=[round(float(x), 3) for x in aperture.m_A], feasible=len(placements),
-                    placement=placements[0].summary() if placements else None)
+                    placement=placements[0].summary() if placements else None, refused=dict(refused))
         if not placements:
-            self.feedback_message = f"no feasible base placement among {p.samples} samples in the cone"
+            why = ", ".join(f"{reason} {n}" for reason, n in refused.most_common())
+            self.feedback_message = f"no feasible base placement among {p.samples} samples in the cone ({why})"
             return Status.FAILURE
         self.placement, self.stage = placements[0], "drive"
         self.write(f"{self.robot_name}/{PLACEMENT}", self.placement)

@@ -93,14 +93,28 @@ def tree_log_odds(tree: pyoctomap.OcTree, points: np.ndarray) -> np.ndarray:
 class VolumetricMap:
     """M: an OctoMap occupancy octree in the navigation frame (m), fed with posed depth frames."""
 
-    def __init__(self, resolution: float = 0.03):
-        """An empty map (every voxel unknown) of voxels ``resolution`` (m) wide."""
+    def __init__(self, resolution: float = 0.03, surface_resolution: float = 0.01):
+        """An empty map (every voxel unknown) of voxels ``resolution`` (m) wide, keeping the measured surface
+        points one per ``surface_resolution`` (m) cell."""
         self.resolution = float(resolution)
+        self.surface_resolution = float(surface_resolution)
         self.tree = pyoctomap.OcTree(self.resolution)
+        self._surface = np.zeros((0, 3))
 
     def insert(self, cloud: SensorCloud) -> None:
-        """Integrate one frame's rays: misses along each ray, a hit at its end (OctoMap, each voxel once a frame)."""
+        """Integrate one frame's rays: misses along each ray, a hit at its end (OctoMap, each voxel once a frame);
+        the returns within ``max_range`` join :attr:`surface`."""
         self.tree.insertPointCloud(cloud.points, cloud.origin, max_range=cloud.max_range)
+        returns = cloud.points[np.linalg.norm(cloud.points - cloud.origin, axis=1) < cloud.max_range]
+        merged = np.vstack((self._surface, returns))  # the first point of each cell kept: the map's own record
+        _, first = np.unique(np.floor(merged / self.surface_resolution).astype(np.int64), axis=0, return_index=True)
+        self._surface = merged[np.sort(first)]
+
+    @property
+    def surface(self) -> np.ndarray:
+        """``(n, 3)`` measured points (m) of every frame inserted, one per ``surface_resolution`` cell: the surface
+        the frames saw, finer than the voxels (what a new frame is registered against, :mod:`.registration`)."""
+        return self._surface
 
     def log_odds(self, points: np.ndarray) -> np.ndarray:
         """Occupancy log-odds at ``points`` ``(n, 3)`` (m); NaN where unknown."""
