@@ -22,12 +22,14 @@ Blackboard: reads ``{robot}/apertures`` and ``{robot}/volumetric_map`` (updated 
 writes ``{robot}/launch_plans``, the
 feasible :class:`~.launch_pose.LaunchPlan` list, best first. Events: a
 ``state_change`` with phase ``profile`` (the detection's centre, how many
-configurations and feasible plans, the best plan). SUCCESS with at least
+configurations (their angles θ, degrees) and feasible plans, the best plan). SUCCESS with at least
 one plan; FAILURE when the ranking is empty, the aperture is not detected
 again near where it was ranked, or the MAV fits nowhere in it. Metres, radians, the navigation frame.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from py_trees.common import Status
@@ -112,6 +114,7 @@ class AnalyzeAperture(Skill["AnalyzeAperture.Params"]):
         self.write(f"{self.robot_name}/{LAUNCH_PLANS}", plans)
         phase_event(self, "profile", detected=True, centre=[round(float(x), 3) for x in found.centre_nav],
                     configurations=len(configs), feasible=len(plans),
+                    angles_deg=[round(math.degrees(c.angle), 1) for c in configs],
                     best=plans[0].summary() if plans else None)
         if not plans:
             self.feedback_message = f"the MAV fits nowhere in the aperture ({len(configs)} configurations, none level)"

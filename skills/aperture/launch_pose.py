@@ -21,9 +21,9 @@ of Phase II it has "egressed from the back side", d_l past the plane — where
 Definition 2 wants the launch pose's translation. The MAV's heading (body x)
 lies along the insertion, −n̂ (it goes through nose first,
 :mod:`.silhouette`). Phase III levels the MAV by turning the apparatus about
-the insertion axis, by at most ``max_level_roll`` (its boom still passes
-through the aperture, whose clearance the paper does not bound): that
-removes up to that much of the fit's roll; the pitch, set by the plane's
+the insertion axis, by at most ``max_level_roll`` (default: any fit's roll;
+the boom, still in the aperture, turns about its own axis, and the turn is
+collision-checked): that removes up to that much of the fit's roll; the pitch, set by the plane's
 tilt, is not changed. The launch attitude is accepted when its residual roll
 and its pitch are within α_launch.
 
@@ -57,12 +57,14 @@ class LaunchParams:
     Attributes:
         d_l: d_l (m), the launching apparatus's length (handle centre to MAV seat).
         alpha_launch: α_launch (rad), largest roll and pitch at take-off (Definition 2; chosen, none given).
-        max_level_roll: largest turn (rad) of the apparatus about the insertion axis in Phase III (chosen).
+        max_level_roll: largest turn (rad) of the apparatus about the insertion axis in Phase III (chosen: π/2, any
+            fit's roll, θ ∈ (−π/2, π/2]; the turn is collision-checked like every segment, and past the wall the
+            boom turns about its own axis. At 20° the amoeba's fits along its minor axis were all refused).
     """
 
     d_l: float = D_L_M
     alpha_launch: float = ALPHA_LAUNCH
-    max_level_roll: float = math.radians(20.0)
+    max_level_roll: float = math.pi / 2
 
 
 @dataclass(frozen=True)
