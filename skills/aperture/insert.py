@@ -118,7 +118,11 @@ class ArmSkillParams(NodeParams):
     acceleration: float = Field(1.0, gt=0.0)
     """Joint acceleration limit (rad/s²) of every motion (chosen)."""
     tolerance: float = Field(0.01, gt=0.0)
-    """Largest joint error (rad) at which a motion has arrived."""
+    """Largest joint error (rad) at which a free motion has arrived."""
+    fine_tolerance: float = Field(0.002, gt=0.0)
+    """Largest joint error (rad) at which a motion at the aperture (Phase I's end, the entry, the slip, the turn
+    and the retreat) has arrived: 2 mm at the MAV 1 m from the shoulder, above the 12-bit encoders' 1.5 mrad. At ``tolerance``
+    (0.01 rad) the entry began up to a centimetre off the plan: the whole clearance of a tight aperture."""
     max_checks: int = Field(15000, ge=100, le=200000)
     """RRT* stops after this many collision checks (deterministic, §IV-F's "collision-free arm planning")."""
     check_resolution: float = Field(0.02, gt=0.001, le=0.1)
@@ -142,6 +146,7 @@ class ArmSkill(Skill[ArmSkillParams]):
         self.T_M_nav = np.linalg.inv(transform(p_M, rotation_matrix(q_M)))
         self.ik = ClosedFormIK(self.robot.arm_kinematics)
         self.motion: ArmMotion | None = None
+        self.motion_tolerance = self.params.tolerance
 
     def limits(self, slow: bool) -> TrajectoryParams:
         """The timing limits of a slow (holster, aperture) or free motion."""
@@ -164,11 +169,11 @@ class ArmSkill(Skill[ArmSkillParams]):
         them), the stowed apparatuses of ``stowed`` holsters, and the held apparatus (and MAV) if ``with_tool``."""
         occupancy = self.read(f"{self.robot_name}/{VOLUMETRIC_MAP}")
         voxels = occupancy.occupied_boxes() if occupancy is not None else (np.zeros((0, 3)), np.zeros(0))
-        extra = stowed_objects([self.holster_frame(h) for h in stowed])
+        extra = {"stowed apparatus": stowed_objects([self.holster_frame(h) for h in stowed])}
         if plan is not None and len(plan.rim) >= 3:
             rim = rim_of(plan)
             voxels = voxels_off_the_opening(voxels[0], voxels[1], rim, self.params.wall_depth)
-            extra += rim_objects(rim, self.T_M_nav, self.params.wall_depth)
+            extra["rim"] = rim_objects(rim, self.T_M_nav, self.params.wall_depth)
         tool = tool_shapes(with_mav) if with_tool else []
         return environment(self.robot.arm_kinematics, MMS_URDF, self.T_M_nav, voxels, tool, extra)
 
@@ -179,15 +184,17 @@ class ArmSkill(Skill[ArmSkillParams]):
         return plan_arm_path(model, q_from, q_to, seed,
                              ArmPlanParams(resolution=self.params.check_resolution, max_checks=self.params.max_checks))
 
-    def run(self, path: np.ndarray, slow: bool, label: str) -> None:
-        """Begin executing ``path`` (rad)."""
+    def run(self, path: np.ndarray, slow: bool, label: str, fine: bool = False) -> None:
+        """Begin executing ``path`` (rad) at the slow or free speed limit, to end within ``fine_tolerance`` if
+        ``fine`` (the motions at the aperture) or ``tolerance``."""
         self.motion = ArmMotion(path, self.limits(slow), self.now, label)
+        self.motion_tolerance = self.params.fine_tolerance if fine else self.params.tolerance
 
     def moving(self) -> bool:
         """Advance the present motion; True while it is not over."""
         if self.motion is None:
             return False
-        if not self.motion.step(self.robot, self.now, self.params.tolerance):
+        if not self.motion.step(self.robot, self.now, self.motion_tolerance):
             self.feedback_message = f"{self.motion.label}: {self.now - self.motion.started:.1f} s"
             return True
         self.motion = None
@@ -285,14 +292,14 @@ class InsertScout(ArmSkill):
             if not branches:
                 refused["approach out of reach"] += 1
                 continue
-            phases: LaunchPhases | str = "approach in collision"
+            phases: LaunchPhases | str = ""
             for q_approach in branches:  # the arm's IK branches at the approach pose, nearest the viewing pose first
                 if not model.free(q_approach):
+                    phases = phases or f"approach {' & '.join(model.contacts(q_approach)) or 'joint limits'}"
                     continue
                 phases = launch_phases(model, self.ik, plan, self.T_M_nav, q_approach, p.standoff, shallow, D_L_M)
                 if isinstance(phases, LaunchPhases):
                     break
-                phases = f"{phases} blocked"
             if isinstance(phases, str):
                 refused[phases] += 1
                 continue
@@ -304,7 +311,7 @@ class InsertScout(ArmSkill):
                                        self.T_M_nav)
             phase_event(self, "insertion_plan", tried=tried, depth=round(phases.goals.depth, 3), plan=plan.summary())
             phase_event(self, "phase1")
-            self.run(path, False, "phase I: to the approach pose")
+            self.run(path, False, "phase I: to the approach pose", fine=True)  # the entry starts on the plan
             self.stage = "enter"
             return Status.RUNNING
         why = ", ".join(f"{reason} {n}" for reason, n in sorted(refused.items()))
@@ -327,13 +334,13 @@ class InsertScout(ArmSkill):
         return list(valid[np.argsort(np.sum((valid - self.view_q) ** 2, axis=1))])
 
     def _enter(self) -> Status:
-        self.run(self.insertion.phases.entry, True, "phase I: onto the aperture plane")
+        self.run(self.insertion.phases.entry, True, "phase I: onto the aperture plane", fine=True)
         self.stage = "slip"
         return Status.RUNNING
 
     def _slip(self) -> Status:
         phase_event(self, "phase2", depth=round(self.insertion.phases.goals.depth, 3))
-        self.run(self.insertion.phases.slip, True, "phase II: slipping through")
+        self.run(self.insertion.phases.slip, True, "phase II: slipping through", fine=True)
         self.stage = "done"
         return Status.RUNNING
 

@@ -85,7 +85,7 @@ class LaunchScout(ArmSkill):
 
     def _turn(self) -> Status:
         phase_event(self, "phase3", roll=round(self.inserted.plan.roll, 4), pitch=round(self.inserted.plan.pitch, 4))
-        self.run(self.inserted.phases.turn, True, "phase III: to the launch attitude")
+        self.run(self.inserted.phases.turn, True, "phase III: to the launch attitude", fine=True)
         self.stage, self.since = "launch", -1.0
         return Status.RUNNING
 
@@ -114,7 +114,7 @@ class LaunchScout(ArmSkill):
             phase_event(self, "cleared", scout=self.params.scout, climbed=round(climbed, 3))
             phases = self.inserted.phases
             back = np.vstack((phases.turn[::-1], phases.slip[::-1], phases.entry[::-1]))
-            self.run(back, True, "retreating through the aperture")
+            self.run(back, True, "retreating through the aperture", fine=True)
             self.stage = "to_holster"
             return Status.RUNNING
         if self.now - self.since > self.params.clear_timeout:
