@@ -119,10 +119,15 @@ class ArmSkillParams(NodeParams):
     """Joint acceleration limit (rad/s²) of every motion (chosen)."""
     tolerance: float = Field(0.01, gt=0.0)
     """Largest joint error (rad) at which a free motion has arrived."""
-    fine_tolerance: float = Field(0.002, gt=0.0)
+    fine_tolerance: float = Field(0.004, gt=0.0)
     """Largest joint error (rad) at which a motion at the aperture (Phase I's end, the entry, the slip, the turn
-    and the retreat) has arrived: 2 mm at the MAV 1 m from the shoulder, above the 12-bit encoders' 1.5 mrad. At ``tolerance``
-    (0.01 rad) the entry began up to a centimetre off the plan: the whole clearance of a tight aperture."""
+    and the retreat) has arrived within ``settle_time`` of its trajectory's end: 4 mm at the MAV 1 m from the
+    shoulder, about 2.6 counts of the 12-bit encoders (1.5 mrad a count, 0.5 count noise) so that six readings
+    meet it at rest. At ``tolerance`` (0.01 rad) the entry began up to a centimetre off the plan: the whole
+    clearance of a tight aperture."""
+    settle_time: float = Field(3.0, ge=0.0, le=60.0)
+    """Seconds (sim) a fine motion waits past its trajectory's end for ``fine_tolerance``; then ``tolerance``
+    suffices (the joint PIDs' integral removes a held payload's last centimetre-radian slowly)."""
     max_checks: int = Field(15000, ge=100, le=200000)
     """RRT* stops after this many collision checks (deterministic, §IV-F's "collision-free arm planning")."""
     check_resolution: float = Field(0.02, gt=0.001, le=0.1)
@@ -194,7 +199,9 @@ class ArmSkill(Skill[ArmSkillParams]):
         """Advance the present motion; True while it is not over."""
         if self.motion is None:
             return False
-        if not self.motion.step(self.robot, self.now, self.motion_tolerance):
+        settling = self.now - self.motion.started - self.motion.trajectory.duration
+        tolerance = self.motion_tolerance if settling < self.params.settle_time else self.params.tolerance
+        if not self.motion.step(self.robot, self.now, tolerance):
             self.feedback_message = f"{self.motion.label}: {self.now - self.motion.started:.1f} s"
             return True
         self.motion = None
