@@ -247,7 +247,7 @@ class WheeledOnboard(Onboard):
     def reset_estimate(self, position: Sequence[float], yaw: float) -> None:
         """Restart the base estimate at ``position`` (m; x, y used) and ``yaw`` (rad) in its own frame: a correction
         the robot computed itself (e.g. registering a depth frame against its map), never the simulator's pose."""
-        self._robot.estimator.reset(np.asarray(position, dtype=float), float(yaw))  # type: ignore[attr-defined]
+        self._robot.estimator.reset(np.asarray(position, dtype=float), float(yaw))
 
     def odometry(self) -> StateEstimate:
         """The wheel odometry's own estimate of ``base_footprint`` (frame ``odom``): smooth, drifting with distance.
