@@ -1,7 +1,7 @@
 """Micro-scout deployment through apertures of Arora & Papachristos, side by side with the paper: Table I, ranking.
 
     python benchmarks/aperture.py [--quick] [--workers 2] [--runs DIR] [--scans 50] [--repeats 20] [--trials 100]
-                                  [--seeds 10] [--only insertion]
+                                  [--seeds 10] [--only insertion|mission]
                                   [--out benchmarks/out/aperture.json] [--report docs/results/aperture.md]
 
 Sections (each a function filling one key of the results; the JSON and the
@@ -37,7 +37,7 @@ C_a, a valid configuration and a rejected one per shape) and like Fig. 5
 (the decoy wall as the camera sees it, one scan's detections and ranking, the
 first-ranked candidates of every scan). ``--quick``: 6 scans, 5 repeats.
 ``--runs DIR`` keeps the campaign and its logs and reads back the seeds already
-run with the same plan. ``--only insertion`` runs that section alone and merges
+run with the same plan. ``--only insertion`` (``--only mission``) runs that section alone and merges
 it into the existing page (its section and its row of the targets) and JSON,
 leaving the other sections as they are (hand-written notes included). Prints
 the targets; exits with 1 when one is missed.
@@ -560,19 +560,22 @@ def report(results: dict[str, Any], images: dict[str, str], path: Path) -> None:
         "",
         *mission_lines(results["mission"]),
         "",
-        "## Reproducing",
+        REPRODUCING_HEADING,
         "",
         f"- This page: `{results['command']}`.",
         "- The full counts: `python benchmarks/aperture.py --workers 1 --runs DIR` (`--runs` resumes).",
         "- One scan by hand: `marsupial run benchmarks/missions/aperture_ranking.yaml --seed 3 --log scan.mcap`.",
-        "- The insertion trials alone, merged into this page: `python benchmarks/aperture.py --only insertion "
-        "--workers 1 --runs DIR`.",
+        "- The insertion trials (or the mission's seeds) alone, merged into this page: `python benchmarks/aperture.py "
+        "--only insertion --workers 1 --runs DIR` (`--only mission`).",
     ]
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("\n".join(lines) + "\n")
 
 
 # ------------------------------------------------------------ main
+REPRODUCING_HEADING = "## Reproducing"
+
+
 def insertion_section(results: dict[str, Any], runs: Path, trials: int, workers: int) -> dict[str, Any]:
     """Section 3 run (:mod:`aperture_insertion`), stamped with the command, date and load it ran with."""
     ins = insertion_trials(runs, trials, workers)
@@ -581,23 +584,32 @@ def insertion_section(results: dict[str, Any], runs: Path, trials: int, workers:
     return ins
 
 
-def merge_insertion(results: dict[str, Any], runs: Path, trials: int, args: Any) -> dict[str, Any]:
-    """``--only insertion``: section 3 alone, merged into the page ``args.report`` (its section and its row of the
-    targets; the other sections untouched) and into the JSON ``args.out``; returns the merged JSON."""
-    ins = results["insertion"] = insertion_section(results, runs, trials, args.workers)
-    image = plot_insertion(ins, args.report.parent / "img", _pyplot, _save)
-    met, measured = insertion_verdict(ins)
+def merge_only(results: dict[str, Any], runs: Path, trials: int, seeds: int, args: Any) -> dict[str, Any]:
+    """``--only insertion`` or ``--only mission``: that section alone, merged into the page ``args.report`` (its
+    section and its row of the targets; the other sections untouched) and into the JSON ``args.out``; returns the
+    merged JSON."""
+    key = args.only
+    if key == "insertion":
+        data = insertion_section(results, runs, trials, args.workers)
+        image = plot_insertion(data, args.report.parent / "img", _pyplot, _save)
+        heading, before = INSERTION_HEADING, MISSION_HEADING  # the sections in the order of the full page
+        lines = insertion_lines(data, os.path.relpath(image, args.report.parent))
+        met, measured = insertion_verdict(data)
+    else:
+        data = mission_seeds(runs, seeds, args.workers)
+        data.update(command=results["command"], date=results["date"])
+        heading, before, lines = MISSION_HEADING, REPRODUCING_HEADING, mission_lines(data)
+        met, measured = mission_verdict(data)
+    results[key] = data
     page = args.report.read_text() if args.report.exists() else f"{REPORT_TITLE}\n"
-    page = merge_target_row(page, TARGETS["insertion"], met, measured)
-    page = merge_section(page, INSERTION_HEADING, insertion_lines(ins, os.path.relpath(image, args.report.parent)),
-                         before=MISSION_HEADING)  # the sections in the order of the full page
+    page = merge_target_row(page, TARGETS[key], met, measured)
+    page = merge_section(page, heading, lines, before=before)
     args.report.parent.mkdir(parents=True, exist_ok=True)
     args.report.write_text(page)
     merged = json.loads(args.out.read_text()) if args.out.exists() else {"machine": results["machine"]}
-    merged["insertion"] = ins
-    merged.setdefault("targets", {})["insertion"] = {"met": met, "measured": measured}
-    print_targets("aperture targets", {"insertion": TARGETS["insertion"]}, {"insertion": (met, measured)},
-                  results["machine"])
+    merged[key] = data
+    merged.setdefault("targets", {})[key] = {"met": met, "measured": measured}
+    print_targets("aperture targets", {key: TARGETS[key]}, {key: (met, measured)}, results["machine"])
     print(f"report: {args.report}")
     write_report(merged, args.out)
     return merged
@@ -610,7 +622,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--seeds", type=int, default=None, help="seeds of the aperture_scouts mission (default 10)")
     parser.add_argument("--repeats", type=int, default=None, help="profile-analysis calls per shape (default 20)")
     parser.add_argument("--trials", type=int, default=None, help="insertion trials over the shapes (default 100)")
-    parser.add_argument("--only", choices=("insertion",), default=None,
+    parser.add_argument("--only", choices=("insertion", "mission"), default=None,
                         help="run this section alone and merge it into the existing page and JSON")
     args = parser.parse_args(argv)
     for name in ("scans", "seeds", "repeats", "trials", "workers"):
@@ -628,8 +640,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             "command": " ".join(["python benchmarks/aperture.py", *(sys.argv[1:] if argv is None else argv)]),
             "quick": args.quick, "date": time.strftime("%Y-%m-%d"), "machine": machine_info(workers=args.workers),
         }
-        if args.only == "insertion":
-            return merge_insertion(results, runs, trials, args)
+        if args.only is not None:
+            return merge_only(results, runs, trials, seeds, args)
         results["table_i"], candidates = table_i(repeats)
         print_tables([("Table I: profile analysis, one core", TABLE_I_HEADER, table_i_rows(results["table_i"]))],
                      results["machine"])

@@ -131,6 +131,7 @@ CASES = {
     "land": (LANDING, "uav", {}),
     "relocalize": (LANDING, "uav", {}),
     "drive_pattern": (LANDING, "ugv", {}),
+    "explore_volume": ("mms", "mms", {"bounds": [[-1.6, -3.0, 0.0], [1.6, 0.5, 1.6]]}),
     "aperture_scan": ("mms", "mms", {}),
     "child_link": ("yard_away", "child", {}),
     "child_approach": ("yard_facing", "child", {}),

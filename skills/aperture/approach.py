@@ -54,8 +54,8 @@ from pydantic import Field
 from marsupial.trees.skill import NodeParams, Skill
 from marsupial.world.capabilities import HasArmModel, HasBase
 
-from ..navigation import pure_pursuit
 from ..uav_docking.team import phase_event
+from .base_drive import pursuit_step, turn_step
 from .insertion import level_insertion_tcp
 from .placement import RHO_M, CameraModel, Placement, PlacementParams, plan_placements
 from .registration import register_planar
@@ -134,25 +134,11 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
         if self.placement is None:
             return self._plan()
         p, goal = self.params, self.placement.pose
+        if self.stage != "arm" and self._move_base(goal):
+            return Status.RUNNING
         estimate = self.robot.estimate()
-        offset = goal[:2] - estimate.position[:2]
-        distance = float(np.hypot(*offset))
+        distance = float(np.hypot(*(goal[:2] - estimate.position[:2])))
         yaw_error = math.remainder(goal[2] - estimate.yaw, math.tau)
-        if self.stage == "drive" and distance > p.position_tolerance:
-            c, s = math.cos(estimate.yaw), math.sin(estimate.yaw)
-            goal_R = np.array([c * offset[0] + s * offset[1], -s * offset[0] + c * offset[1]])
-            limit = min(p.max_speed, self.robot.limits.max_speed, math.sqrt(distance))  # slowing to a stop
-            self.robot.drive(*pure_pursuit(goal_R, limit, self.robot.limits.max_omega))
-            self.feedback_message = f"driving to the placement: {distance:.2f} m"
-            return Status.RUNNING
-        if self.stage in ("drive", "turn") and abs(yaw_error) > p.yaw_tolerance:
-            self.stage = "turn"
-            self.robot.drive(0.0, float(np.clip(2.0 * yaw_error, -0.5, 0.5)))
-            self.feedback_message = f"turning to the placement's heading: {yaw_error:+.2f} rad"
-            return Status.RUNNING
-        if self.stage != "arm":
-            self.stage = "arm"
-            self.robot.stop()
         self.robot.set_joint_targets(self.placement.q)
         joint_error = float(np.max(np.abs(self.robot.joint_positions() - self.placement.q)))
         if joint_error > p.joint_tolerance:
@@ -170,6 +156,22 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
             return Status.RUNNING
         self.feedback_message = f"at the placement ({distance:.2f} m, {yaw_error:+.2f} rad off), aperture in view"
         return Status.SUCCESS
+
+    def _move_base(self, goal: np.ndarray) -> bool:
+        """Drive, then turn, to the placement ``goal`` ``(x, y, yaw)``; False once there (stage ``arm``)."""
+        p = self.params
+        if self.stage == "drive":
+            left = pursuit_step(self.robot, goal, p.max_speed, p.position_tolerance)
+            if left is not None:
+                self.feedback_message = f"driving to the placement: {left:.2f} m"
+                return True
+            self.stage = "turn"
+        turning = turn_step(self.robot, float(goal[2]), p.yaw_tolerance)
+        if turning is not None:
+            self.feedback_message = f"turning to the placement's heading: {turning:+.2f} rad"
+            return True
+        self.stage = "arm"
+        return False
 
     def _relocalize(self) -> bool:
         """Register one fresh depth frame from the viewing pose against M's surface and correct the base estimate

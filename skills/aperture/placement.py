@@ -197,6 +197,37 @@ def footprint_points(poses: np.ndarray, footprint: Footprint, spacing: float) ->
     return np.stack((x, y), axis=-1)
 
 
+def voxel_states(occupancy: VolumetricMap, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """M's voxels over the box from corner ``lo`` to ``hi`` (nav, m) as a dense array.
+
+    Returns the OctoMap key (floor(coordinate / resolution)) of the box's first voxel ``(3,)`` and the states
+    ``(nx, ny, nz)`` (:data:`~.volumetric.UNKNOWN`, ``FREE``, ``OCCUPIED``) of the voxels from there; built from
+    the octree's leaves in the box (one pass over the known voxels; pruned leaves fill their blocks).
+    """
+    res = occupancy.resolution
+    key_lo = np.floor(np.asarray(lo, dtype=float) / res + 1e-9).astype(np.int64)
+    key_hi = np.floor(np.asarray(hi, dtype=float) / res).astype(np.int64)
+    shape = tuple(int(k) for k in key_hi - key_lo + 1)
+    states = np.full(shape, UNKNOWN, dtype=np.int8)
+    tree = occupancy.tree
+    leaves = [(*leaf.getCoordinate(), leaf.getSize(), tree.isNodeOccupied(leaf))
+              for leaf in tree.begin_leafs_bbx(key_lo * res, (key_hi + 1) * res)]
+    if leaves:
+        table = np.array(leaves, dtype=float)
+        size = table[:, 3]
+        first = np.rint((table[:, :3] - size[:, None] / 2.0) / res).astype(np.int64) - key_lo
+        count = np.maximum(1, np.rint(size / res).astype(np.int64))
+        value = np.where(table[:, 4] > 0, OCCUPIED, FREE).astype(np.int8)
+        single = (count == 1) & np.all((first >= 0) & (first < shape), axis=1)
+        states[tuple(first[single].T)] = value[single]
+        for k in np.flatnonzero(count > 1):  # pruned leaves: blocks of voxels
+            a = np.maximum(first[k], 0)
+            b = np.minimum(first[k] + count[k], shape)
+            if np.all(b > a):
+                states[a[0]:b[0], a[1]:b[1], a[2]:b[2]] = value[k]
+    return key_lo, states
+
+
 class FootprintGrid:
     """M collapsed onto the ground over a box: a cell is blocked when a voxel of the base's height band is occupied
     or none of them is known.
@@ -220,28 +251,9 @@ class FootprintGrid:
                  known_free: np.ndarray | None = None):
         res = occupancy.resolution
         self.resolution = res
-        key_lo = np.floor(np.r_[lo, z_band[0]] / res + 1e-9).astype(np.int64)
-        key_hi = np.floor(np.r_[hi, z_band[1]] / res).astype(np.int64)
-        shape = tuple(int(k) for k in key_hi - key_lo + 1)
-        states = np.full(shape, UNKNOWN, dtype=np.int8)
-        tree = occupancy.tree
-        leaves = [(*leaf.getCoordinate(), leaf.getSize(), tree.isNodeOccupied(leaf))
-                  for leaf in tree.begin_leafs_bbx(key_lo * res, (key_hi + 1) * res)]
-        if leaves:
-            table = np.array(leaves, dtype=float)
-            size = table[:, 3]
-            first = np.rint((table[:, :3] - size[:, None] / 2.0) / res).astype(np.int64) - key_lo
-            count = np.maximum(1, np.rint(size / res).astype(np.int64))
-            value = np.where(table[:, 4] > 0, OCCUPIED, FREE).astype(np.int8)
-            single = (count == 1) & np.all((first >= 0) & (first < shape), axis=1)
-            states[tuple(first[single].T)] = value[single]
-            for k in np.flatnonzero(count > 1):  # pruned leaves: blocks of voxels
-                a = np.maximum(first[k], 0)
-                b = np.minimum(first[k] + count[k], shape)
-                if np.all(b > a):
-                    states[a[0]:b[0], a[1]:b[1], a[2]:b[2]] = value[k]
+        key_lo, states = voxel_states(occupancy, np.r_[lo, z_band[0]], np.r_[hi, z_band[1]])
         self.key_lo = key_lo[:2]
-        self.shape = shape[:2]
+        self.shape = states.shape[:2]
         self.occupied = (states == OCCUPIED).any(axis=2)
         self.blocked = self.occupied | (states == UNKNOWN).all(axis=2)
         if known_free is not None and len(known_free):

@@ -14,7 +14,8 @@ ranked by belief (:func:`~.ranking.rank_apertures`), go to the blackboard.
 Blackboard: writes ``{robot}/apertures``, the list of
 :class:`~.ranking.RankedAperture` (highest score first), and
 ``{robot}/volumetric_map``, the map M it built (for base placement,
-:mod:`.approach`). Events: a
+:mod:`.approach`); an M already there (``explore_volume``'s) is extended,
+not replaced (the belief then takes that M's voxel edge, not ``resolution``). Events: a
 ``state_change`` with phase ``scan_pose`` at each pose (its index and the
 candidates the window found) and ``ranked`` at the end (each candidate's
 score, map point m_A and centre, nav frame, m). SUCCESS with at least one
@@ -73,7 +74,8 @@ class ApertureScan(Skill["ApertureScan.Params"]):
         tolerance: float = Field(0.01, gt=0.0)
         """Largest joint error (rad) at which the arm has reached a pose."""
         resolution: float = Field(0.03, gt=0.0)
-        """Voxel edge of M and of the belief (m); see :mod:`.volumetric` for the measured cost."""
+        """Voxel edge of M and of the belief (m) when no M is on the blackboard; see :mod:`.volumetric` for the
+        measured cost."""
         stride_px: int = Field(2, ge=1)
         """Every how many depth pixels a ray is inserted into M."""
         max_range: float = Field(4.0, gt=0.0)
@@ -101,8 +103,9 @@ class ApertureScan(Skill["ApertureScan.Params"]):
         self.arrived_at: float | None = None
         self.frames: list[DepthFrame] = []
         self.last_stamp = -np.inf
-        self.occupancy = VolumetricMap(p.resolution)
-        self.belief = ApertureBelief(p.resolution, BeliefParams(p.p_hit, p.p_miss, d_a=p.d_a))
+        known = self.read(f"{self.robot_name}/{VOLUMETRIC_MAP}")  # M as exploration left it, extended here
+        self.occupancy = known if known is not None else VolumetricMap(p.resolution)
+        self.belief = ApertureBelief(self.occupancy.resolution, BeliefParams(p.p_hit, p.p_miss, d_a=p.d_a))
         self.tracks: list[ApertureTrack] = []
 
     def step(self) -> Status:
@@ -137,7 +140,7 @@ class ApertureScan(Skill["ApertureScan.Params"]):
         candidates = detect_apertures(self.frames, DetectionParams(n_frames=p.n_frames))
         cloud = sensor_cloud(self.frames[-1], p.stride_px, p.max_range)
         self.occupancy.insert(cloud)
-        regions = [aperture_region(c, p.resolution, p.d_a) for c in candidates]
+        regions = [aperture_region(c, self.occupancy.resolution, p.d_a) for c in candidates]
         self.belief.update(cloud, regions, self.occupancy)
         for candidate, region in zip(candidates, regions, strict=True):
             associate(self.tracks, candidate, region, p.same_aperture_m)

@@ -100,11 +100,14 @@ class VolumetricMap:
         self.surface_resolution = float(surface_resolution)
         self.tree = pyoctomap.OcTree(self.resolution)
         self._surface = np.zeros((0, 3))
+        self.revision = 0
+        """Frames inserted so far (a cache of anything computed from M is valid while it is unchanged)."""
 
     def insert(self, cloud: SensorCloud) -> None:
         """Integrate one frame's rays: misses along each ray, a hit at its end (OctoMap, each voxel once a frame);
         the returns within ``max_range`` join :attr:`surface`."""
         self.tree.insertPointCloud(cloud.points, cloud.origin, max_range=cloud.max_range)
+        self.revision += 1
         returns = cloud.points[np.linalg.norm(cloud.points - cloud.origin, axis=1) < cloud.max_range]
         merged = np.vstack((self._surface, returns))  # the first point of each cell kept: the map's own record
         _, first = np.unique(np.floor(merged / self.surface_resolution).astype(np.int64), axis=0, return_index=True)

@@ -1,0 +1,314 @@
+"""``explore_volume`` and ``exploration_stuck``: the MMS explores the bounded volume V until no view offers gain.
+
+Arora & Papachristos, §IV-A and Fig. 3: the aperture search "is autonomously triggered once the robot
+exploration mission is 'stuck'" — "no feasible exploration routes offer any further exploration gain [29]".
+The skill runs receding-horizon next-best-view exploration ([29]; one step: :mod:`.exploration`) with the
+MMS's only depth sensor, the eye-in-hand camera:
+
+1. **Look around**: the arm takes the level pose panned by each of ``view_pan`` and the ground-looking poses
+   of ``approach_aperture`` panned by each of ``look_pan``; one new depth frame from each goes into M
+   (:mod:`.volumetric`), posed by the base estimate and the encoders.
+2. **Plan**: the reachable viewpoints of V (:func:`~.exploration.plan_viewpoints`), best gain · exp(−λ c)
+   first; none with gain ≥ ``stuck_gain``: stuck.
+3. **Go**: the arm folds back to the angles it had when the skill started, the base turns toward the
+   viewpoint, drives there on its estimate (pure pursuit) and turns to its heading; then 1. again.
+
+Stuck, the arm folds back and the base turns to ``end_yaw`` (if given): the skill succeeds. Past
+``max_views`` look-arounds without being stuck it fails.
+
+What it senses: the eye-in-hand depth frames, the base estimate, the arm encoders and the camera's
+intrinsics. Blackboard: writes ``{robot}/volumetric_map`` (M; one already there is extended, and
+``aperture_scan`` extends this one) and ``{robot}/exploration``, the :class:`ExplorationRecord` that
+``exploration_stuck`` plans with. Events: ``state_change`` with phase ``explore_view`` (each look-around:
+the base estimate, the unknown volume left in V), ``explore_goal`` (the viewpoint chosen, how many
+were feasible) and ``exploration_stuck`` (the views made, the unknown volume left).
+
+The condition ``exploration_stuck`` holds when, from where the robot's estimate stands now, the plan over M
+finds no viewpoint with gain ≥ ``stuck_gain`` (the settings of the exploration that ran; it does not hold
+before one has run). It plans again only when M or the estimate changed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+from py_trees.common import Status
+from pydantic import Field, field_validator, model_validator
+
+from marsupial.trees.skill import Condition, NodeParams, Skill
+from marsupial.world.capabilities import HasArmModel, HasBase
+
+from ..navigation import Footprint
+from ..uav_docking.team import phase_event
+from .approach import LOOK_POSES
+from .base_drive import pursuit_step, turn_step
+from .exploration import ExplorationParams, GainGrid, Viewpoint, outside_body, plan_viewpoints
+from .scan import LEVEL_POSE, VOLUMETRIC_MAP, fresh_frame
+from .volumetric import VolumetricMap, sensor_cloud
+
+EXPLORATION = "exploration"
+"""Blackboard key (under the robot's name) of the :class:`ExplorationRecord`."""
+
+Pose6 = tuple[float, float, float, float, float, float]
+
+
+@dataclass
+class ExplorationRecord:
+    """What ``explore_volume`` explored with: its settings, the camera's position in the base frame (m) at the
+    look-around's central pose, the base poses ``(x, y, yaw)`` (nav, m, rad) it viewed from, whether it got stuck."""
+
+    params: ExplorationParams
+    camera_offset: np.ndarray
+    visited: list[np.ndarray] = field(default_factory=list)
+    stuck: bool = False
+
+
+def base_pose(robot: Any) -> tuple[np.ndarray, float]:
+    """The base estimate as ``(x, y, yaw)`` (nav, m, rad) and its height (m)."""
+    estimate = robot.estimate()
+    return np.array([*estimate.position[:2], estimate.yaw]), float(estimate.position[2])
+
+
+class ExploreVolume(Skill["ExploreVolume.Params"]):
+    """Explore the bounded volume V with the eye-in-hand camera, next best view after view, until stuck."""
+
+    class Params(NodeParams):
+        bounds: tuple[tuple[float, float, float], tuple[float, float, float]]
+        """V: corners ``[[x, y, z], [x, y, z]]`` (nav frame of the base estimate, m), low then high."""
+        stuck_gain: float = Field(1.5, gt=0.0)
+        """A view must see this much unknown volume (m³) in V; no reachable one does: stuck (chosen: about a
+        tenth of the approach area's volume)."""
+        clearance: float = Field(1.2, ge=0.0)
+        """Least distance (m) of a viewpoint's base centre from anything occupied (the camera, 0.8 m ahead of
+        the base, keeps 0.4 m to the surface it looks at)."""
+        spacing: float = Field(0.3, gt=0.0)
+        """Distance (m) between viewpoint positions."""
+        headings: int = Field(8, ge=1, le=64)
+        """Yaws per viewpoint position."""
+        view_range: float = Field(3.0, gt=0.0)
+        """Unknown cells count toward a view's gain up to this far (m) from the camera."""
+        lam: float = Field(0.5, ge=0.0)
+        """λ (1/m) of the score gain · exp(−λ c) ([29])."""
+        max_views: int = Field(6, ge=1)
+        """Look-arounds at most; still not stuck after them: FAILURE."""
+        end_yaw: float | None = None
+        """Heading (rad, nav) the base turns to once stuck (none: it stays as it is)."""
+        level_pose: Pose6 = LEVEL_POSE
+        """Arm angles (rad) of the central level view."""
+        view_pan: tuple[float, ...] = (-0.6, 0.0, 0.6)
+        """Offsets (rad) of the first arm joint from ``level_pose``, one level view each."""
+        look_poses: tuple[Pose6, ...] = LOOK_POSES
+        """Arm angles (rad) of the central ground-looking views (the ground the base would drive on)."""
+        look_pan: tuple[float, ...] = (-0.6, 0.0, 0.6)
+        """Offsets (rad) of the first arm joint from each of ``look_poses``."""
+        max_speed: float = Field(0.3, gt=0.0)
+        """Base speed limit (m/s)."""
+        position_tolerance: float = Field(0.05, gt=0.0)
+        """Distance (m) of the estimate from a viewpoint at which the base has arrived."""
+        yaw_tolerance: float = Field(0.05, gt=0.0)
+        """Heading error (rad) at which a turn has ended."""
+        joint_tolerance: float = Field(0.01, gt=0.0)
+        """Largest joint error (rad) at which the arm has reached a pose."""
+        footprint: tuple[float, float, float] = (0.495, 0.495, 0.335)
+        """Front, rear, half-width (m) of the base rectangle about ``base_footprint`` (mms.urdf's 0.99 × 0.67 m)."""
+        body_margin: float = Field(0.05, ge=0.0)
+        """Returns within the rectangle inflated by this (m) ..."""
+        body_height: float = Field(1.0, gt=0.0)
+        """... and lower than this (m) above the ground are the robot itself: not inserted into M."""
+        resolution: float = Field(0.03, gt=0.0)
+        """Voxel edge of M (m) when no M is on the blackboard."""
+        stride_px: int = Field(2, ge=1)
+        """Every how many depth pixels a ray is inserted into M."""
+        max_range: float = Field(4.0, gt=0.0)
+        """Rays are truncated at this range (m)."""
+        camera: str = "camera"
+        """The eye-in-hand RGB-D camera."""
+
+        @field_validator("bounds", "look_poses", mode="before")
+        @classmethod
+        def _nested_lists(cls, value: Any) -> Any:
+            return tuple(tuple(v) if isinstance(v, list) else v for v in value) if isinstance(value, list | tuple) \
+                else value
+
+        @model_validator(mode="after")
+        def _low_below_high(self) -> ExploreVolume.Params:
+            if any(lo >= hi for lo, hi in zip(*self.bounds, strict=True)):
+                raise ValueError(f"bounds: each low corner coordinate must be below the high one, got {self.bounds}")
+            return self
+
+    robot_kinds = (HasBase, HasArmModel)
+    sensors = ("camera",)
+    claims = ("base", "arm")
+    writes = (f"{{robot}}/{VOLUMETRIC_MAP}", f"{{robot}}/{EXPLORATION}")
+
+    def start(self) -> None:
+        p = self.params
+        known = self.read(f"{self.robot_name}/{VOLUMETRIC_MAP}")
+        self.occupancy: VolumetricMap = known if known is not None else VolumetricMap(p.resolution)
+        self.write(f"{self.robot_name}/{VOLUMETRIC_MAP}", self.occupancy)
+        self.fold = self.robot.joint_positions().copy()  # the arm's travelling angles
+        self.record: ExplorationRecord | None = None
+        self.goal: Viewpoint | None = None
+        self.stage = "look"  # look → plan → fold → face → drive → turn → look …; stuck: fold → end
+        self._new_look()
+
+    def _new_look(self) -> None:
+        p = self.params
+        level = [np.array(p.level_pose) + np.r_[pan, np.zeros(5)] for pan in p.view_pan]
+        ground = [np.array(pose) + np.r_[pan, np.zeros(5)] for pose in p.look_poses for pan in p.look_pan]
+        self.looks = level + ground
+        self.central = int(np.argmin(np.abs(p.view_pan))) if p.view_pan else None  # level view for the offset
+        self.look_index = 0
+        self.arrived_at: float | None = None
+
+    def step(self) -> Status:
+        if self.stage == "look":
+            return self._look()
+        if self.stage == "plan":
+            return self._plan()
+        if self.stage in ("fold", "end"):
+            return self._fold()
+        return self._go()
+
+    def _look(self) -> Status:
+        """The arm through the look-around's poses; one new depth frame from each into M."""
+        target = self.looks[self.look_index]
+        self.robot.set_joint_targets(target)
+        left = len(self.looks) - self.look_index
+        self.feedback_message = f"looking around: {left} views to go"
+        if float(np.max(np.abs(self.robot.joint_positions() - target))) > self.params.joint_tolerance:
+            return Status.RUNNING
+        if self.arrived_at is None:
+            self.arrived_at = self.now
+        taken = fresh_frame(self.robot, self.params.camera, self.arrived_at)
+        if taken is None:
+            return Status.RUNNING
+        frame = taken[0]
+        pose, z = base_pose(self.robot)
+        footprint = Footprint(*(d + self.params.body_margin for d in self.params.footprint))
+        cloud = sensor_cloud(frame, self.params.stride_px, self.params.max_range)
+        self.occupancy.insert(outside_body(cloud, pose, z, footprint, self.params.body_height))
+        if self.look_index == self.central and self.record is None:
+            self.record = ExplorationRecord(self._settings(), self._camera_offset(frame.position))
+            self.write(f"{self.robot_name}/{EXPLORATION}", self.record)
+        self.look_index += 1
+        self.arrived_at = None
+        if self.look_index == len(self.looks):
+            self.stage = "plan"
+        return Status.RUNNING
+
+    def _camera_offset(self, camera: np.ndarray) -> np.ndarray:
+        """The camera's position (m) in ``base_footprint``'s frame, from the base estimate."""
+        pose, z = base_pose(self.robot)
+        c, s = math.cos(pose[2]), math.sin(pose[2])
+        d = np.asarray(camera, dtype=float) - np.r_[pose[:2], z]
+        return np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1], d[2]])
+
+    def _settings(self) -> ExplorationParams:
+        """The planning settings: the node's, with the view's half-angles from the camera's intrinsics."""
+        p = self.params
+        intrinsics = self.robot.sensor(p.camera).intrinsics
+        K = np.asarray(intrinsics.K, dtype=float)
+        half_h = max((abs(x) for x in p.view_pan), default=0.0) + math.atan2(0.5 * intrinsics.width, K[0, 0])
+        half_v = math.atan2(0.5 * intrinsics.height, K[1, 1])
+        return ExplorationParams(bounds=p.bounds, spacing=p.spacing, headings=p.headings, clearance=p.clearance,
+                                 view_range=p.view_range, half_fov=(half_h, half_v), lam=p.lam,
+                                 stuck_gain=p.stuck_gain, footprint=p.footprint)
+
+    def _plan(self) -> Status:
+        """The next best view, or stuck."""
+        assert self.record is not None, "the look-around's level view gives the camera offset"
+        pose, z = base_pose(self.robot)
+        self.record.visited.append(pose)
+        unknown = GainGrid(self.occupancy, self.params.bounds).unknown_volume
+        phase_event(self, "explore_view", view=len(self.record.visited), pose=[round(float(x), 3) for x in pose],
+                    unknown_m3=round(unknown, 3))
+        views = plan_viewpoints(self.occupancy, pose, self.record.camera_offset, self.record.params,
+                                self.record.visited, z)
+        if not views:
+            self.record.stuck = True
+            phase_event(self, "exploration_stuck", views=len(self.record.visited), unknown_m3=round(unknown, 3))
+            self.stage = "end"
+            return Status.RUNNING
+        if len(self.record.visited) >= self.params.max_views:
+            self.feedback_message = (f"not stuck after {len(self.record.visited)} views: {len(views)} still offer "
+                                     f"up to {views[0].gain:.2f} m³ ({unknown:.2f} m³ unknown in V)")
+            return Status.FAILURE
+        self.goal = views[0]
+        phase_event(self, "explore_goal", goal=self.goal.summary(), feasible=len(views))
+        self.stage = "fold"
+        return Status.RUNNING
+
+    def _fold(self) -> Status:
+        """The arm back to its travelling angles; then on to the viewpoint (or, stuck, the final turn)."""
+        self.robot.stop()
+        self.robot.set_joint_targets(self.fold)
+        error = float(np.max(np.abs(self.robot.joint_positions() - self.fold)))
+        if error > self.params.joint_tolerance:
+            self.feedback_message = f"folding the arm: {error:.3f} rad"
+            return Status.RUNNING
+        if self.stage == "fold":
+            self.stage = "face"
+            return Status.RUNNING
+        end_yaw = self.params.end_yaw
+        if end_yaw is not None and turn_step(self.robot, end_yaw, self.params.yaw_tolerance) is not None:
+            self.feedback_message = "stuck: turning to the final heading"
+            return Status.RUNNING
+        assert self.record is not None
+        self.feedback_message = f"stuck after {len(self.record.visited)} views: no reachable view offers gain"
+        return Status.SUCCESS
+
+    def _go(self) -> Status:
+        """Turn toward the viewpoint, drive there, turn to its heading; then look around."""
+        assert self.goal is not None
+        p, goal = self.params, self.goal.pose
+        pose, _ = base_pose(self.robot)
+        offset = goal[:2] - pose[:2]
+        if self.stage == "face":
+            heading = math.atan2(offset[1], offset[0]) if np.hypot(*offset) > p.position_tolerance else pose[2]
+            if turn_step(self.robot, heading, p.yaw_tolerance) is not None:
+                self.feedback_message = "turning toward the next view"
+                return Status.RUNNING
+            self.stage = "drive"
+        if self.stage == "drive":
+            left = pursuit_step(self.robot, goal, p.max_speed, p.position_tolerance)
+            if left is not None:
+                self.feedback_message = f"driving to the next view: {left:.2f} m"
+                return Status.RUNNING
+            self.stage = "turn"
+        if turn_step(self.robot, float(goal[2]), p.yaw_tolerance) is not None:
+            self.feedback_message = "turning to the next view's heading"
+            return Status.RUNNING
+        self.stage = "look"
+        self._new_look()
+        return Status.RUNNING
+
+
+class ExplorationStuck(Condition["ExplorationStuck.Params"]):
+    """Holds when no reachable viewpoint of V offers gain, planned over M from the robot's estimate now."""
+
+    class Params(NodeParams):
+        stuck_gain: float | None = Field(None, gt=0.0)
+        """Gain (m³) a view must offer (none: the exploration's ``stuck_gain``)."""
+
+    primary: ClassVar[str] = "stuck_gain"
+    robot_kinds = (HasBase, HasArmModel)
+    reads = (f"{{robot}}/{EXPLORATION}", f"{{robot}}/{VOLUMETRIC_MAP}")
+
+    def check(self) -> bool:
+        record = self.read(f"{self.robot_name}/{EXPLORATION}")
+        occupancy = self.read(f"{self.robot_name}/{VOLUMETRIC_MAP}")
+        if record is None or occupancy is None:
+            return False
+        pose, z = base_pose(self.robot)
+        key = (id(occupancy), occupancy.revision, tuple(np.round(pose, 2)))
+        if getattr(self, "_key", None) != key:
+            params = record.params
+            if self.params.stuck_gain is not None:
+                params = ExplorationParams(**{**params.__dict__, "stuck_gain": self.params.stuck_gain})
+            self._key = key
+            self._stuck = not plan_viewpoints(occupancy, pose, record.camera_offset, params, record.visited, z)
+        return bool(self._stuck)
