@@ -20,6 +20,10 @@ encoders and the arm's URDF model):
   check (§IV-E output, §IV-F);
 - :mod:`.arm_motion` — collision-free arm motion (§IV-F): python-fcl checks of the arm (and what it
   carries) against M and the robot, OMPL RRT* in joint space, seeded;
+- :mod:`.exploration` — receding-horizon next-best-view over M in the bounded volume V (§III Problem 1): viewpoints,
+  gain, stuck;
+- :mod:`.explore` — the ``explore_volume`` skill and the ``exploration_stuck`` condition;
+- :mod:`.base_drive` — the base driven to a pose on its estimate (pure pursuit, then the heading);
 - :mod:`.scan` — the ``aperture_scan`` skill: arm scanning poses → M, L_a, ranked candidates;
 - :mod:`.approach` — the ``approach_aperture`` skill: a placement for a ranked aperture, driven to;
 - :mod:`.analyze` — the ``analyze_aperture`` skill: the aperture detected again from there, its profile
