@@ -86,16 +86,18 @@ def test_exploration_params_refuse_an_empty_volume():
 
 
 def test_the_mms_explores_the_approach_area_until_stuck(tmp_path):
-    """From 2.4 m before the wall facing it: several views, then no reachable view offers 1.5 m³; the condition
-    agrees; every view stands 1.2 m clear of the wall; logged."""
+    """From 2.4 m before the wall facing it, no horizon: several views, then no reachable view offers 1.5 m³; the
+    condition agrees; every view stands 1.2 m clear of the wall; back where it began, facing the wall; logged."""
     log = tmp_path / "explore.mcap"
     with World(scene="collapsed_mockup", seed=3) as world:
         world.add_robot("mms", "mms", pose=[0.3, -2.4, math.pi / 2], mavs=False)
         harness = Harness(world, log_path=log)
-        explore = harness.node(ExploreVolume, robot="mms", bounds=[[-1.6, -3.0, 0.0], [1.6, 0.5, 1.6]])
+        explore = harness.node(ExploreVolume, robot="mms", bounds=[[-1.6, -3.0, 0.0], [1.6, 0.5, 1.6]],
+                               horizon=None, end_at_start=True, end_yaw=math.pi / 2)
         stuck = harness.node(ExplorationStuck, robot="mms")
         root = Sequence("explore, then stuck", memory=True, children=[explore, stuck])
         status = harness.run(root, 150.0)
+        estimate = harness.context.onboard("mms").estimate()
         harness.close()
     assert status.name == "SUCCESS", explore.feedback_message
     events = read_log(log).events_of("state_change")
@@ -106,3 +108,21 @@ def test_the_mms_explores_the_approach_area_until_stuck(tmp_path):
     assert all(g["goal"]["gain_m3"] >= 1.5 for g in goals)
     assert all(-0.05 - g["goal"]["pose"][1] >= 1.2 - 0.05 for g in goals)  # the wall's face is at y = -0.05
     assert any(e.get("phase") == "exploration_stuck" for e in events)
+    assert any(e.get("phase") == "explore_return" for e in events)
+    assert np.hypot(estimate.position[0] - 0.3, estimate.position[1] + 2.4) < 0.1
+    assert abs(math.remainder(estimate.yaw - math.pi / 2, math.tau)) < 0.06
+
+
+def test_with_the_default_horizon_the_mms_is_stuck_after_one_look_around(tmp_path):
+    """The paper's case (§III Problem 1: exploration "assumed to (almost) immediately reach the maximum-possible
+    exploration gain"): within 1 m of the start no view offers 1.5 m³ of V."""
+    log = tmp_path / "stuck.mcap"
+    with World(scene="collapsed_mockup", seed=3) as world:
+        world.add_robot("mms", "mms", pose=[0.3, -2.4, math.pi / 2], mavs=False)
+        harness = Harness(world, log_path=log)
+        explore = harness.node(ExploreVolume, robot="mms", bounds=[[-1.6, -3.0, 0.0], [1.6, 0.5, 1.6]])
+        assert harness.run(explore, 40.0).name == "SUCCESS", explore.feedback_message
+        harness.close()
+    events = read_log(log).events_of("state_change")
+    phases = [e.get("phase", "") for e in events]
+    assert [p for p in phases if p.startswith("explor")] == ["explore_view", "exploration_stuck"]

@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from marsupial.skills.aperture.registration import register_planar
+from marsupial.skills.aperture.registration import RegistrationParams, register_planar
 
 
 def _surfaces(step: float, shift: float = 0.0) -> np.ndarray:
@@ -55,3 +55,11 @@ def test_the_registration_removes_the_odometrys_planar_drift():
 def test_a_frame_that_meets_nothing_of_the_map_is_not_registered():
     far_away = _surfaces(0.02) + [5.0, 5.0, 0.0]
     assert register_planar(far_away, _surfaces(0.01), np.array([5.0, 3.6, 0.0])) is None
+
+
+def test_a_correction_beyond_the_plausible_drift_is_refused():
+    truth, true_yaw = np.array([0.1, -1.4, 0.0]), math.pi / 2
+    estimate, yaw = truth + [0.04, -0.06, 0.0], true_yaw + 0.02
+    frame = _posed_by(_surfaces(0.013, shift=0.004), truth, true_yaw, estimate, yaw)
+    assert register_planar(frame, _surfaces(0.01), estimate, RegistrationParams(max_correction=0.05)) is None
+    assert register_planar(frame, _surfaces(0.01), estimate, RegistrationParams(max_correction=0.1)) is not None

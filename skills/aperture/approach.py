@@ -58,7 +58,7 @@ from ..uav_docking.team import phase_event
 from .base_drive import pursuit_step, turn_step
 from .insertion import level_insertion_tcp
 from .placement import RHO_M, CameraModel, Placement, PlacementParams, plan_placements
-from .registration import register_planar
+from .registration import relocalize_base
 from .scan import APERTURES, VOLUMETRIC_MAP, fresh_frame
 from .volumetric import sensor_cloud
 
@@ -181,16 +181,9 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
         if taken is None:
             return False
         occupancy = self.read(f"{self.robot_name}/{VOLUMETRIC_MAP}")
-        cloud = sensor_cloud(taken[0], self.params.stride_px, self.params.max_range)
-        returns = cloud.points[np.linalg.norm(cloud.points - cloud.origin, axis=1) < cloud.max_range]
-        estimate = self.robot.estimate()
-        found = register_planar(returns, occupancy.surface, estimate.position)
-        if found is None:
-            phase_event(self, "relocalized", correction=None)
-            return True
-        position, yaw = found.apply(estimate.position, estimate.yaw)
-        self.robot.reset_estimate(position, yaw)
-        phase_event(self, "relocalized", correction=found.summary())
+        found = relocalize_base(self.robot, sensor_cloud(taken[0], self.params.stride_px, self.params.max_range),
+                                occupancy)
+        phase_event(self, "relocalized", correction=found.summary() if found is not None else None)
         return True
 
     def _look(self) -> Status:

@@ -57,6 +57,7 @@ class ExplorationParams:
         margin: the rectangle is inflated by this (m) on the drive.
         z_band: heights (m above the ground) of the base's collision box: voxels there block it.
         path_step: distance (m) between the base poses checked along a drive.
+        horizon: views farther than this (m) from the base are not planned (``None``: all of V).
     """
 
     bounds: tuple[tuple[float, float, float], tuple[float, float, float]]
@@ -73,6 +74,7 @@ class ExplorationParams:
     margin: float = 0.05
     z_band: tuple[float, float] = (0.06, 0.39)
     path_step: float = 0.1
+    horizon: float | None = None
 
 
 @dataclass(frozen=True)
@@ -202,6 +204,28 @@ def turning_disc(pose: np.ndarray, footprint: Footprint, spacing: float) -> np.n
     return np.column_stack((x[inside] + pose[0], y[inside] + pose[1]))
 
 
+def drive_grid(occupancy: VolumetricMap, start: np.ndarray, params: ExplorationParams,
+               ground_z: float = 0.0) -> FootprintGrid:
+    """M collapsed onto the ground over V and the reach of a base standing in it (:class:`~.placement.FootprintGrid`),
+    the disc the base turns in at ``start`` ``(x, y, yaw)`` (nav, m, rad) counted as its own space."""
+    lo, hi = (np.asarray(b, dtype=float) for b in params.bounds)
+    footprint = Footprint(*(d + params.margin for d in params.footprint))
+    own = turning_disc(np.asarray(start, dtype=float), footprint, 0.5 * occupancy.resolution)
+    reach = math.hypot(max(footprint.front, footprint.rear), footprint.half_width) + occupancy.resolution
+    return FootprintGrid(occupancy, lo[:2] - reach, hi[:2] + reach,
+                         (ground_z + params.z_band[0], ground_z + params.z_band[1]), own)
+
+
+def drive_clear(occupancy: VolumetricMap, start: np.ndarray, goal: np.ndarray, params: ExplorationParams,
+                ground_z: float = 0.0, grid: FootprintGrid | None = None) -> bool:
+    """Whether the straight drive from ``start`` to ``goal`` ``(x, y, yaw)`` (nav, m, rad), turning at both ends
+    (:func:`drive_poses`), keeps the inflated base rectangle off M's occupied and unseen columns."""
+    ground = grid if grid is not None else drive_grid(occupancy, start, params, ground_z)
+    footprint = Footprint(*(d + params.margin for d in params.footprint))
+    poses = drive_poses(np.asarray(start, dtype=float), np.asarray(goal, dtype=float), params.path_step)
+    return not bool(ground.collides(footprint_points(poses, footprint, occupancy.resolution)).any())
+
+
 def plan_viewpoints(occupancy: VolumetricMap, start: np.ndarray, camera_offset: np.ndarray,
                     params: ExplorationParams, visited: list[np.ndarray] | None = None,
                     ground_z: float = 0.0) -> list[Viewpoint]:
@@ -216,12 +240,7 @@ def plan_viewpoints(occupancy: VolumetricMap, start: np.ndarray, camera_offset: 
     start = np.asarray(start, dtype=float)
     lo, hi = (np.asarray(b, dtype=float) for b in params.bounds)
     grid = GainGrid(occupancy, params.bounds, params.cell_voxels)
-    spacing = occupancy.resolution
-    footprint = Footprint(*(d + params.margin for d in params.footprint))
-    own = turning_disc(start, footprint, 0.5 * spacing)
-    reach = math.hypot(max(footprint.front, footprint.rear), footprint.half_width) + spacing  # a base in V, turning
-    ground = FootprintGrid(occupancy, lo[:2] - reach, hi[:2] + reach,
-                           (ground_z + params.z_band[0], ground_z + params.z_band[1]), own)
+    ground = drive_grid(occupancy, start, params, ground_z)
     clearance = distance_transform_edt(~(ground.occupied & ground.blocked)) * ground.resolution  # not its own space
     xs = np.arange(lo[0] + 0.5 * params.spacing, hi[0], params.spacing)
     ys = np.arange(lo[1] + 0.5 * params.spacing, hi[1], params.spacing)
@@ -230,7 +249,10 @@ def plan_viewpoints(occupancy: VolumetricMap, start: np.ndarray, camera_offset: 
     ij = np.floor(positions / ground.resolution).astype(np.int64) - ground.key_lo
     inside = np.all((ij >= 0) & (ij < ground.shape), axis=1)
     ij = np.where(inside[:, None], ij, 0)
-    positions = positions[inside & (clearance[ij[:, 0], ij[:, 1]] >= params.clearance)]
+    keep = inside & (clearance[ij[:, 0], ij[:, 1]] >= params.clearance)
+    if params.horizon is not None:
+        keep &= np.hypot(*(positions - start[:2]).T) <= params.horizon
+    positions = positions[keep]
     yaws = np.arange(params.headings) * math.tau / params.headings - math.pi
     visited = visited or []
     views: list[Viewpoint] = []
@@ -240,7 +262,7 @@ def plan_viewpoints(occupancy: VolumetricMap, start: np.ndarray, camera_offset: 
             if any(np.hypot(*(pose[:2] - v[:2])) < 0.5 * params.spacing
                    and abs(math.remainder(yaw - v[2], math.tau)) < math.pi / params.headings for v in visited):
                 continue
-            if ground.collides(footprint_points(drive_poses(start, pose, params.path_step), footprint, spacing)).any():
+            if not drive_clear(occupancy, start, pose, params, ground_z, ground):
                 continue
             camera = camera_at(pose, camera_offset, ground_z)
             cells = visible_unknown(grid, camera, params.view_range, params.half_fov[1])

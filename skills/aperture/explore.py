@@ -13,7 +13,10 @@ MMS's only depth sensor, the eye-in-hand camera:
 3. **Go**: the arm folds back to the angles it had when the skill started, the base turns toward the
    viewpoint, drives there on its estimate (pure pursuit) and turns to its heading; then 1. again.
 
-Stuck, the arm folds back and the base turns to ``end_yaw`` (if given): the skill succeeds. Past
+Stuck, the arm folds back, the base drives back to the first view's pose (``end_at_start``, if that drive is
+clear in M) and turns to ``end_yaw`` (if given): the skill succeeds. With ``relocalize``, a level frame once
+back at the start is registered against the surface M kept and corrects the base estimate
+(:mod:`.registration`; event ``relocalized``). Past
 ``max_views`` look-arounds without being stuck it fails.
 
 What it senses: the eye-in-hand depth frames, the base estimate, the arm encoders and the camera's
@@ -21,7 +24,8 @@ intrinsics. Blackboard: writes ``{robot}/volumetric_map`` (M; one already there 
 ``aperture_scan`` extends this one) and ``{robot}/exploration``, the :class:`ExplorationRecord` that
 ``exploration_stuck`` plans with. Events: ``state_change`` with phase ``explore_view`` (each look-around:
 the base estimate, the unknown volume left in V), ``explore_goal`` (the viewpoint chosen, how many
-were feasible) and ``exploration_stuck`` (the views made, the unknown volume left).
+were feasible), ``exploration_stuck`` (the views made, the unknown volume left) and ``explore_return``
+(``end_at_start``'s drive back).
 
 The condition ``exploration_stuck`` holds when, from where the robot's estimate stands now, the plan over M
 finds no viewpoint with gain ≥ ``stuck_gain`` (the settings of the exploration that ran; it does not hold
@@ -45,7 +49,9 @@ from ..navigation import Footprint
 from ..uav_docking.team import phase_event
 from .approach import LOOK_POSES
 from .base_drive import pursuit_step, turn_step
-from .exploration import ExplorationParams, GainGrid, Viewpoint, outside_body, plan_viewpoints
+from .detection import DepthFrame
+from .exploration import ExplorationParams, GainGrid, Viewpoint, drive_clear, outside_body, plan_viewpoints
+from .registration import relocalize_base
 from .scan import LEVEL_POSE, VOLUMETRIC_MAP, fresh_frame
 from .volumetric import VolumetricMap, sensor_cloud
 
@@ -94,8 +100,11 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
         """λ (1/m) of the score gain · exp(−λ c) ([29])."""
         max_views: int = Field(6, ge=1)
         """Look-arounds at most; still not stuck after them: FAILURE."""
+        end_at_start: bool = False
+        """Once stuck, drive back to where the exploration began (if the drive is clear in M): ``aperture_scan``'s
+        poses are made for a camera about 1.3 m from the structure, the standoff the MMS arrived at."""
         end_yaw: float | None = None
-        """Heading (rad, nav) the base turns to once stuck (none: it stays as it is)."""
+        """Heading (rad, nav) the base turns to once stuck, after ``end_at_start`` (none: it stays as it is)."""
         level_pose: Pose6 = LEVEL_POSE
         """Arm angles (rad) of the central level view."""
         view_pan: tuple[float, ...] = (-0.6, 0.0, 0.6)
@@ -124,6 +133,14 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
         """Every how many depth pixels a ray is inserted into M."""
         max_range: float = Field(4.0, gt=0.0)
         """Rays are truncated at this range (m)."""
+        relocalize: bool = True
+        """Back at the start (``end_at_start``), register a level frame against the surface M kept, the first
+        look-around's included, and correct the base estimate by it (:mod:`.registration`; the paper's MMS has SLAM,
+        ours wheel odometry); false: keep the odometry. Views of unknown space have little of M to register
+        against, so the frames between are not registered."""
+        horizon: float | None = Field(1.0, gt=0.0)
+        """Receding horizon (m): views farther than this from the base are not planned (none: all of V; chosen:
+        short drives keep the odometry's drift small, it drifted up to 14 cm over 5–6 m)."""
         camera: str = "camera"
         """The eye-in-hand RGB-D camera."""
 
@@ -152,7 +169,8 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
         self.fold = self.robot.joint_positions().copy()  # the arm's travelling angles
         self.record: ExplorationRecord | None = None
         self.goal: Viewpoint | None = None
-        self.stage = "look"  # look → plan → fold → face → drive → turn → look …; stuck: fold → end
+        self.returning = False  # stuck, on the way back to the first view
+        self.stage = "look"  # look → plan → fold → face → drive → turn → look …; stuck: [fold … turn] end [final]
         self._new_look()
 
     def _new_look(self) -> None:
@@ -171,6 +189,8 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
             return self._plan()
         if self.stage in ("fold", "end"):
             return self._fold()
+        if self.stage == "final":
+            return self._final()
         return self._go()
 
     def _look(self) -> Status:
@@ -200,6 +220,12 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
             self.stage = "plan"
         return Status.RUNNING
 
+    def _relocalize(self, frame: DepthFrame) -> None:
+        """Register ``frame`` against M's surface and correct the base estimate (:mod:`.registration`)."""
+        found = relocalize_base(self.robot, sensor_cloud(frame, self.params.stride_px, self.params.max_range),
+                                self.occupancy)
+        phase_event(self, "relocalized", correction=found.summary() if found is not None else None)
+
     def _camera_offset(self, camera: np.ndarray) -> np.ndarray:
         """The camera's position (m) in ``base_footprint``'s frame, from the base estimate."""
         pose, z = base_pose(self.robot)
@@ -216,7 +242,7 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
         half_v = math.atan2(0.5 * intrinsics.height, K[1, 1])
         return ExplorationParams(bounds=p.bounds, spacing=p.spacing, headings=p.headings, clearance=p.clearance,
                                  view_range=p.view_range, half_fov=(half_h, half_v), lam=p.lam,
-                                 stuck_gain=p.stuck_gain, footprint=p.footprint)
+                                 stuck_gain=p.stuck_gain, footprint=p.footprint, horizon=p.horizon)
 
     def _plan(self) -> Status:
         """The next best view, or stuck."""
@@ -231,7 +257,7 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
         if not views:
             self.record.stuck = True
             phase_event(self, "exploration_stuck", views=len(self.record.visited), unknown_m3=round(unknown, 3))
-            self.stage = "end"
+            self._end(pose, z)
             return Status.RUNNING
         if len(self.record.visited) >= self.params.max_views:
             self.feedback_message = (f"not stuck after {len(self.record.visited)} views: {len(views)} still offer "
@@ -241,6 +267,18 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
         phase_event(self, "explore_goal", goal=self.goal.summary(), feasible=len(views))
         self.stage = "fold"
         return Status.RUNNING
+
+    def _end(self, pose: np.ndarray, z: float) -> None:
+        """Stuck: back to the first view's pose (``end_at_start``, if the drive is clear in M), else end here."""
+        assert self.record is not None
+        first = self.record.visited[0]
+        far = np.hypot(*(first[:2] - pose[:2])) > self.params.position_tolerance
+        if self.params.end_at_start and far and drive_clear(self.occupancy, pose, first, self.record.params, z):
+            self.goal, self.returning = Viewpoint(first, 0.0, 0.0, 0.0), True
+            phase_event(self, "explore_return", goal=self.goal.summary())
+            self.stage = "fold"
+        else:
+            self.stage = "end"
 
     def _fold(self) -> Status:
         """The arm back to its travelling angles; then on to the viewpoint (or, stuck, the final turn)."""
@@ -257,9 +295,30 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
         if end_yaw is not None and turn_step(self.robot, end_yaw, self.params.yaw_tolerance) is not None:
             self.feedback_message = "stuck: turning to the final heading"
             return Status.RUNNING
+        if self.returning and self.params.relocalize:
+            self.stage, self.arrived_at = "final", None
+            return Status.RUNNING
+        return self._stuck()
+
+    def _stuck(self) -> Status:
         assert self.record is not None
         self.feedback_message = f"stuck after {len(self.record.visited)} views: no reachable view offers gain"
         return Status.SUCCESS
+
+    def _final(self) -> Status:
+        """Back at the start: the arm at the level pose, one frame registered against M (the drive back drifted)."""
+        target = np.asarray(self.params.level_pose, dtype=float)
+        self.robot.set_joint_targets(target)
+        if float(np.max(np.abs(self.robot.joint_positions() - target))) > self.params.joint_tolerance:
+            self.feedback_message = "stuck, back at the start: relocalising against M"
+            return Status.RUNNING
+        if self.arrived_at is None:
+            self.arrived_at = self.now
+        taken = fresh_frame(self.robot, self.params.camera, self.arrived_at)
+        if taken is None:
+            return Status.RUNNING
+        self._relocalize(taken[0])
+        return self._stuck()
 
     def _go(self) -> Status:
         """Turn toward the viewpoint, drive there, turn to its heading; then look around."""
@@ -281,6 +340,9 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
             self.stage = "turn"
         if turn_step(self.robot, float(goal[2]), p.yaw_tolerance) is not None:
             self.feedback_message = "turning to the next view's heading"
+            return Status.RUNNING
+        if self.returning:
+            self.stage = "end"
             return Status.RUNNING
         self.stage = "look"
         self._new_look()

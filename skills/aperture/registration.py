@@ -38,9 +38,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.spatial import cKDTree
+
+from .volumetric import SensorCloud, VolumetricMap
 
 
 @dataclass(frozen=True)
@@ -56,6 +59,8 @@ class RegistrationParams:
         sigma_point: the depth noise (m) weighting the residuals against the prior.
         sigma_prior: the odometry's error (m; rad for yaw: ``sigma_prior / 1 m``) the prior allows.
         min_pairs: fewer pairs than this and the frame is not registered.
+        max_correction: a correction beyond this (m, and rad × 1 m) is refused: twice the pairing reach, more than
+            the odometry drifts between registrations (a frame of floor and little else once slid 3 m).
     """
 
     start_distance: float = 0.15
@@ -66,6 +71,7 @@ class RegistrationParams:
     sigma_point: float = 0.005
     sigma_prior: float = 0.1
     min_pairs: int = 200
+    max_correction: float = 0.3
 
 
 @dataclass(frozen=True)
@@ -125,7 +131,8 @@ def _moved(points: np.ndarray, pivot: np.ndarray, x: np.ndarray) -> np.ndarray:
 def register_planar(points: np.ndarray, reference: np.ndarray, pivot: np.ndarray,
                     params: RegistrationParams | None = None) -> Registration | None:
     """The planar correction (x, y, yaw) aligning a frame's ``points`` ``(n, 3)`` to ``reference`` ``(m, 3)`` (nav,
-    m) by point-to-plane ICP (module docstring); ``None`` with too few pairs."""
+    m) by point-to-plane ICP (module docstring); ``None`` with too few pairs or a correction beyond
+    ``max_correction``."""
     params = params or RegistrationParams()
     points = np.asarray(points, dtype=float)
     reference = np.asarray(reference, dtype=float)
@@ -160,4 +167,20 @@ def register_planar(points: np.ndarray, reference: np.ndarray, pivot: np.ndarray
     paired = np.isfinite(distance)
     residual = np.einsum("ij,ij->i", normals[index[paired]], moved[paired] - reference[index[paired]])
     rms = float(np.sqrt(np.mean(residual**2))) if len(residual) else math.inf
+    if max(float(np.linalg.norm(x[:2])), abs(float(x[2]))) > params.max_correction:
+        return None
     return Registration(x[:2].copy(), float(x[2]), pivot, int(np.count_nonzero(paired)), rms, iteration)
+
+
+def relocalize_base(robot: Any, cloud: SensorCloud, occupancy: VolumetricMap) -> Registration | None:
+    """Register ``cloud`` (a fresh frame's rays, posed by the present base estimate) against M's surface and, if it
+    registers, reset the robot's base estimate by the correction; returns it (``None``: the estimate is kept).
+
+    ``robot``: the MMS's onboard interface (``estimate``, ``reset_estimate``); nav frame, m, rad.
+    """
+    returns = cloud.points[np.linalg.norm(cloud.points - cloud.origin, axis=1) < cloud.max_range]
+    estimate = robot.estimate()
+    found = register_planar(returns, occupancy.surface, estimate.position)
+    if found is not None:
+        robot.reset_estimate(*found.apply(estimate.position, estimate.yaw))
+    return found
