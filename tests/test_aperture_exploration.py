@@ -80,9 +80,13 @@ def test_the_self_filter_drops_returns_on_the_robot_only():
     assert kept.points.tolist() == [[0.3, 0.0, 1.3], [0.9, 0.0, 0.3], [0.0, 0.5, 0.2]]
 
 
-def test_exploration_params_refuse_an_empty_volume():
+def test_exploration_params_refuse_an_empty_or_a_huge_volume_and_nan():
     with pytest.raises(ValueError, match="low corner"):
         ExploreVolume.Params(bounds=[[1.0, -3.0, 0.0], [-1.0, 0.5, 1.6]])
+    with pytest.raises(ValueError, match="at most 2e"):
+        ExploreVolume.Params(bounds=[[-1e4, -1e4, 0.0], [1e4, 1e4, 2.0]])
+    with pytest.raises(ValueError, match="finite"):
+        ExploreVolume.Params(bounds=[[float("nan"), -3.0, 0.0], [1.0, 0.5, 1.6]])
 
 
 def test_the_mms_explores_the_approach_area_until_stuck(tmp_path):

@@ -59,6 +59,8 @@ EXPLORATION = "exploration"
 """Blackboard key (under the robot's name) of the :class:`ExplorationRecord`."""
 
 Pose6 = tuple[float, float, float, float, float, float]
+MAX_VOXELS = 2e7
+"""Largest V, in voxels of M (its states are held densely while planning: 20 MB; the mission's V has 0.66 M)."""
 
 
 @dataclass
@@ -88,17 +90,17 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
         """A view must see this much unknown volume (m³) in V; no reachable one does: stuck (chosen: about a
         tenth of the approach area's volume)."""
         clearance: float = Field(1.2, ge=0.0)
-        """Least distance (m) of a viewpoint's base centre from anything occupied (the camera, 0.8 m ahead of
-        the base, keeps 0.4 m to the surface it looks at)."""
-        spacing: float = Field(0.3, gt=0.0)
+        """Least distance (m) of a viewpoint's base centre from anything occupied (the camera, 1.06 m ahead of
+        the base at the level pose, keeps 0.14 m to the surface it looks at, beyond its 0.1 m near clip)."""
+        spacing: float = Field(0.3, ge=0.05)
         """Distance (m) between viewpoint positions."""
         headings: int = Field(8, ge=1, le=64)
         """Yaws per viewpoint position."""
-        view_range: float = Field(3.0, gt=0.0)
+        view_range: float = Field(3.0, gt=0.0, le=10.0)
         """Unknown cells count toward a view's gain up to this far (m) from the camera."""
         lam: float = Field(0.5, ge=0.0)
         """λ (1/m) of the score gain · exp(−λ c) ([29])."""
-        max_views: int = Field(6, ge=1)
+        max_views: int = Field(6, ge=1, le=100)
         """Look-arounds at most; still not stuck after them: FAILURE."""
         end_at_start: bool = False
         """Once stuck, drive back to where the exploration began (if the drive is clear in M): ``aperture_scan``'s
@@ -154,6 +156,10 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
         def _low_below_high(self) -> ExploreVolume.Params:
             if any(lo >= hi for lo, hi in zip(*self.bounds, strict=True)):
                 raise ValueError(f"bounds: each low corner coordinate must be below the high one, got {self.bounds}")
+            voxels = math.prod((hi - lo) / self.resolution for lo, hi in zip(*self.bounds, strict=True))
+            if voxels > MAX_VOXELS:
+                raise ValueError(f"bounds: V holds {voxels:.3g} voxels of {self.resolution} m, at most "
+                                 f"{MAX_VOXELS:.0e} (a smaller V or a coarser resolution)")
             return self
 
     robot_kinds = (HasBase, HasArmModel)
