@@ -126,9 +126,9 @@ def test_waiting_nodes_in_the_models_schema_and_export():
     ("{wait_until: {timer: 1}, timout: 3}", "m.yaml:3:28: tree.timout: unknown key 'timout'; expected one of name, "
      "timeout, wait_until; did you mean 'timeout'?"),
     ("{wait_until: {timr: 1}}", "m.yaml:3:17: tree.wait_until.timr: unknown condition 'timr'; expected one of "
-     "area_explored, battery_below, benchmark_captured, difficult_area, entrance_matched, features_lost, "
-     "flight_time, landed, object_found, obstacle_ahead, operator, platform_lost, stored, timer, within_criterion; "
-     "did you mean 'timer'?"),
+     "area_explored, battery_below, benchmark_captured, difficult_area, entrance_matched, exploration_stuck, "
+     "features_lost, flight_time, landed, object_found, obstacle_ahead, operator, platform_lost, stored, timer, "
+     "within_criterion; did you mean 'timer'?"),
     ("{run_for: {idle: true}, secnds: 2, seconds: 1}", "m.yaml:3:27: tree.secnds: unknown key 'secnds'; expected one "
      "of name, run_for, seconds; did you mean 'seconds'?"),
     ("{run_for: {idle: true}}", "m.yaml:2:1: tree.seconds: missing required key 'seconds'; expected a number"),
