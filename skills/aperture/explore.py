@@ -109,7 +109,7 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
         """Heading (rad, nav) the base turns to once stuck, after ``end_at_start`` (none: it stays as it is)."""
         level_pose: Pose6 = LEVEL_POSE
         """Arm angles (rad) of the central level view."""
-        view_pan: tuple[float, ...] = (-0.6, 0.0, 0.6)
+        view_pan: tuple[float, ...] = Field((-0.6, 0.0, 0.6), min_length=1)
         """Offsets (rad) of the first arm joint from ``level_pose``, one level view each."""
         look_poses: tuple[Pose6, ...] = LOOK_POSES
         """Arm angles (rad) of the central ground-looking views (the ground the base would drive on)."""
@@ -184,7 +184,7 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
         level = [np.array(p.level_pose) + np.r_[pan, np.zeros(5)] for pan in p.view_pan]
         ground = [np.array(pose) + np.r_[pan, np.zeros(5)] for pose in p.look_poses for pan in p.look_pan]
         self.looks = level + ground
-        self.central = int(np.argmin(np.abs(p.view_pan))) if p.view_pan else None  # level view for the offset
+        self.central = int(np.argmin(np.abs(p.view_pan)))  # the level view nearest ahead gives the camera offset
         self.look_index = 0
         self.arrived_at: float | None = None
 
@@ -365,6 +365,8 @@ class ExplorationStuck(Condition["ExplorationStuck.Params"]):
     primary: ClassVar[str] = "stuck_gain"
     robot_kinds = (HasBase, HasArmModel)
     reads = (f"{{robot}}/{EXPLORATION}", f"{{robot}}/{VOLUMETRIC_MAP}")
+    _key: tuple[Any, ...] | None = None  # (M, its revision, the estimate) the last plan was made for
+    _stuck = False
 
     def check(self) -> bool:
         record = self.read(f"{self.robot_name}/{EXPLORATION}")
@@ -373,10 +375,10 @@ class ExplorationStuck(Condition["ExplorationStuck.Params"]):
             return False
         pose, z = base_pose(self.robot)
         key = (id(occupancy), occupancy.revision, tuple(np.round(pose, 2)))
-        if getattr(self, "_key", None) != key:
+        if self._key != key:
             params = record.params
             if self.params.stuck_gain is not None:
                 params = ExplorationParams(**{**params.__dict__, "stuck_gain": self.params.stuck_gain})
             self._key = key
             self._stuck = not plan_viewpoints(occupancy, pose, record.camera_offset, params, record.visited, z)
-        return bool(self._stuck)
+        return self._stuck
