@@ -228,18 +228,19 @@ def drive_clear(occupancy: VolumetricMap, start: np.ndarray, goal: np.ndarray, p
 
 def plan_viewpoints(occupancy: VolumetricMap, start: np.ndarray, camera_offset: np.ndarray,
                     params: ExplorationParams, visited: list[np.ndarray] | None = None,
-                    ground_z: float = 0.0) -> list[Viewpoint]:
+                    ground_z: float = 0.0, grid: GainGrid | None = None) -> list[Viewpoint]:
     """The reachable viewpoints of V, best score first (§III Problem 1, [29]); those with gain below
     ``stuck_gain`` left out, so an empty list means stuck.
 
     ``start``: the base estimate ``(x, y, yaw)`` (nav, m, rad); ``camera_offset``: the camera's position in the
     base frame at the look-around's central pose (m, :func:`camera_at`); ``visited``: poses already viewed from,
     not proposed again (the same position within half a grid step and yaw within half a heading step);
-    ``ground_z``: the height (m) of the ground the base stands on.
+    ``ground_z``: the height (m) of the ground the base stands on; ``grid``: M's gain cells over V, if already built
+    from this M.
     """
     start = np.asarray(start, dtype=float)
     lo, hi = (np.asarray(b, dtype=float) for b in params.bounds)
-    grid = GainGrid(occupancy, params.bounds, params.cell_voxels)
+    grid = grid if grid is not None else GainGrid(occupancy, params.bounds, params.cell_voxels)
     ground = drive_grid(occupancy, start, params, ground_z)
     clearance = distance_transform_edt(~(ground.occupied & ground.blocked)) * ground.resolution  # not its own space
     xs = np.arange(lo[0] + 0.5 * params.spacing, hi[0], params.spacing)

@@ -201,18 +201,11 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
 
     def _look(self) -> Status:
         """The arm through the look-around's poses; one new depth frame from each into M."""
-        target = self.looks[self.look_index]
-        self.robot.set_joint_targets(target)
         left = len(self.looks) - self.look_index
         self.feedback_message = f"looking around: {left} views to go"
-        if float(np.max(np.abs(self.robot.joint_positions() - target))) > self.params.joint_tolerance:
+        frame = self._frame_at(self.looks[self.look_index])
+        if frame is None:
             return Status.RUNNING
-        if self.arrived_at is None:
-            self.arrived_at = self.now
-        taken = fresh_frame(self.robot, self.params.camera, self.arrived_at)
-        if taken is None:
-            return Status.RUNNING
-        frame = taken[0]
         pose, z = base_pose(self.robot)
         footprint = Footprint(*(d + self.params.body_margin for d in self.params.footprint))
         cloud = sensor_cloud(frame, self.params.stride_px, self.params.max_range)
@@ -225,6 +218,16 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
         if self.look_index == len(self.looks):
             self.stage = "plan"
         return Status.RUNNING
+
+    def _frame_at(self, target: np.ndarray) -> DepthFrame | None:
+        """Hold the arm at ``target`` (rad); once there, the first depth frame taken since (posed), else ``None``."""
+        self.robot.set_joint_targets(target)
+        if float(np.max(np.abs(self.robot.joint_positions() - target))) > self.params.joint_tolerance:
+            return None
+        if self.arrived_at is None:
+            self.arrived_at = self.now
+        taken = fresh_frame(self.robot, self.params.camera, self.arrived_at)
+        return taken[0] if taken is not None else None
 
     def _relocalize(self, frame: DepthFrame) -> None:
         """Register ``frame`` against M's surface and correct the base estimate (:mod:`.registration`)."""
@@ -255,11 +258,12 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
         assert self.record is not None, "the look-around's level view gives the camera offset"
         pose, z = base_pose(self.robot)
         self.record.visited.append(pose)
-        unknown = GainGrid(self.occupancy, self.params.bounds).unknown_volume
+        grid = GainGrid(self.occupancy, self.params.bounds, self.record.params.cell_voxels)
+        unknown = grid.unknown_volume
         phase_event(self, "explore_view", view=len(self.record.visited), pose=[round(float(x), 3) for x in pose],
                     unknown_m3=round(unknown, 3))
         views = plan_viewpoints(self.occupancy, pose, self.record.camera_offset, self.record.params,
-                                self.record.visited, z)
+                                self.record.visited, z, grid)
         if not views:
             self.record.stuck = True
             phase_event(self, "exploration_stuck", views=len(self.record.visited), unknown_m3=round(unknown, 3))
@@ -313,17 +317,11 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
 
     def _final(self) -> Status:
         """Back at the start: the arm at the level pose, one frame registered against M (the drive back drifted)."""
-        target = np.asarray(self.params.level_pose, dtype=float)
-        self.robot.set_joint_targets(target)
-        if float(np.max(np.abs(self.robot.joint_positions() - target))) > self.params.joint_tolerance:
-            self.feedback_message = "stuck, back at the start: relocalising against M"
+        self.feedback_message = "stuck, back at the start: relocalising against M"
+        frame = self._frame_at(np.asarray(self.params.level_pose, dtype=float))
+        if frame is None:
             return Status.RUNNING
-        if self.arrived_at is None:
-            self.arrived_at = self.now
-        taken = fresh_frame(self.robot, self.params.camera, self.arrived_at)
-        if taken is None:
-            return Status.RUNNING
-        self._relocalize(taken[0])
+        self._relocalize(frame)
         return self._stuck()
 
     def _go(self) -> Status:
