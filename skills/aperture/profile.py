@@ -264,7 +264,8 @@ def profile_analysis(
 
     Returns:
         V: at most ``params.n_valid`` configurations, those of step ii first (by rank), then those of the
-        sliding search (step iii); empty when the MAV fits nowhere.
+        sliding search (step iii); with ``centre_radius_px`` each of them centred (step iv) first, then the
+        ones as found; empty when the MAV fits nowhere.
     """
     params = params or ProfileParams()
     c_a = aperture_contour(aperture_mask)
