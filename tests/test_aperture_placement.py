@@ -26,7 +26,14 @@ from marsupial.skills.aperture.detection import (
     fronto_parallel_rotation,
 )
 from marsupial.skills.aperture.launch_pose import LaunchParams, attitude_ok, plan_launch, roll_pitch_yaw
-from marsupial.skills.aperture.placement import CameraModel, PlacementParams, plan_placements
+from marsupial.skills.aperture.placement import (
+    CameraModel,
+    PlacementParams,
+    aim_camera,
+    camera_goal,
+    in_view,
+    plan_placements,
+)
 from marsupial.skills.aperture.profile import LaunchConfiguration
 from marsupial.skills.aperture.volumetric import FREE, SensorCloud, VolumetricMap
 from marsupial.world.apertures import aperture_outline
@@ -126,6 +133,38 @@ def test_ground_the_camera_never_saw_is_not_a_placement():
 
 def test_an_aperture_beyond_the_arm_has_no_placement(seen):
     assert _plan(seen, target=np.array([WALL_X, 0.0, 2.2])) == []  # the camera would need to be 2.2 m up
+
+
+def test_the_camera_is_centred_on_the_view_point_and_still_sees_the_target(seen):
+    # m_A lay 10-15 cm off a U's centre: the camera in front of it saw the far arm cut by the image border
+    view = TARGET + np.array([0.3, 0.08, 0.05])  # the contour's centre: off t_a across n̂ (and its depth ignored)
+    params = PlacementParams()
+    placements = plan_placements(TARGET, NORMAL, seen, KINEMATICS, CAMERA, ARM_MOUNT, START, Q_LEVEL, 0.0,
+                                 np.random.default_rng(0), params, view_point=view)
+    assert placements
+    goal = np.array([WALL_X, 0.08, 0.65]) + params.standoff * NORMAL
+    for placement in placements[:5]:
+        assert np.linalg.norm(placement.camera_position - goal) < 1e-4
+        p_cam, R_opt = placement.camera_position, camera_goal(goal, NORMAL, 0.0)[1]
+        assert in_view(CAMERA, p_cam, R_opt, TARGET, params.view_margin_px)
+
+
+def test_the_camera_is_aimed_again_from_where_the_base_stopped(seen):
+    # the base stops within 5 cm and 0.05 rad of its placement, and the relocalisation moves its estimate by the
+    # drift (up to 8 cm): from there the arm is solved again so that the camera stands at its goal
+    placement = _plan(seen)[0]
+    p_opt, R_opt = camera_goal(TARGET, NORMAL, PlacementParams().standoff)
+    stopped = placement.pose + np.array([0.06, -0.04, 0.04])
+    q = aim_camera(KINEMATICS, CAMERA, ARM_MOUNT, stopped, 0.0, p_opt, R_opt, placement.q)
+    assert q is not None and KINEMATICS.within_limits(q)
+    c, s = math.cos(stopped[2]), math.sin(stopped[2])
+    R_M = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    p_l, R_l = KINEMATICS.forward(q, "camera_link")
+    assert np.linalg.norm(np.array([*stopped[:2], 0.0]) + R_M @ (ARM_MOUNT[0] + p_l) - p_opt) < 1e-4
+    assert np.allclose(R_M @ R_l @ OPTICAL_FORWARD, R_opt, atol=1e-4)
+    assert np.max(np.abs(q - placement.q)) < 0.5  # the nearby solution, not another branch
+    assert aim_camera(KINEMATICS, CAMERA, ARM_MOUNT, placement.pose - np.array([1.5, 0.0, 0.0]), 0.0, p_opt,
+                      R_opt, placement.q) is None  # 1.5 m short: out of the arm's reach
 
 
 # ------------------------------------------------------------------ launch pose

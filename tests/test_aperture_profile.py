@@ -94,3 +94,23 @@ def test_the_sliding_search_finds_the_fit_off_the_midpoint():
         (ua, va), (ub, vb) = config.pair_px
         assert math.hypot(ub - ua, vb - va) >= np.ptp(c_m[:, 0])  # |l| ≥ M_Cm
         assert abs(config.shift_px) <= (math.hypot(ub - ua, vb - va) - np.ptp(c_m[:, 0])) / 2  # edge within l
+
+
+def test_the_first_configuration_is_moved_to_keep_the_mav_off_the_rim():
+    # V's configurations are the first that fit: at a U the MAV's top millimetres under the tongue with 2 cm more
+    # to spare (the arm and the grasp add millimetres and touched it); step iv moves it to the largest margin nearby
+    outline = aperture_outline("u")
+    mask, origin = rasterised(outline, PIXEL_M)
+    c_m = mav_contour(DEPTH_M, K)
+    found = profile_analysis(mask, c_m, ProfileParams(centre_radius_px=0.0))
+    centred = profile_analysis(mask, c_m)
+
+    def margin(config):
+        return outline.boundary.distance(_in_wall_plane(config.placed(c_m), origin))
+
+    assert margin(found[0]) < 0.008
+    assert margin(centred[0]) > margin(found[0]) + 0.015
+    assert margin(centred[0]) >= max(margin(c) for c in found) - 0.002  # as far off as any the search found
+    assert centred[0].angle == found[0].angle and centred[0].pair_px == found[0].pair_px
+    assert len({(c.center_px, c.angle) for c in centred}) == len(centred)  # no duplicates
+    assert found[0] in centred  # the configurations as found follow the centred ones

@@ -29,7 +29,18 @@ straight drive there is not checked against M. Then the arm moves to the
 placement's joint angles, the camera looking at m_A from ``standoff``, and
 (``relocalize``) one depth frame from there is registered against the
 surface M kept, correcting the base estimate for the odometry's drift on
-the drive (:mod:`.registration`; the paper's MMS has SLAM for that).
+the drive (:mod:`.registration`; the paper's MMS has SLAM for that). With
+``reaim`` the arm's angles are then solved again from the (corrected) estimate
+so that the camera stands at the placement's camera goal: the base stops up to
+``position_tolerance`` and ``yaw_tolerance`` off the placement and the
+relocalisation moves the estimate by up to 8 cm more, and the camera, 0.4 m
+from the wall, saw a 30 cm U cut by the image border. The camera is centred
+across n̂ on the aperture's contour (its bounding box), m_A in view
+(:func:`~.placement.plan_placements`' ``view_point``). When the frame does not
+register at the odometry's pose, it is registered from poses along the heading
+(:func:`~.registration.register_searched`: a wheel slipping on an obstacle lets
+the odometry run on), and a placement then more than ``redrive_distance`` ahead
+is driven to again.
 
 Blackboard: reads ``{robot}/apertures`` (``aperture_scan``'s ranking) and
 ``{robot}/volumetric_map`` (M); writes ``{robot}/placement``, the
@@ -37,8 +48,9 @@ Blackboard: reads ``{robot}/apertures`` (``aperture_scan``'s ranking) and
 ``placement`` (the aperture, the placement, how many were feasible, why the others were refused) and
 ``ground_look`` (each look pose), ``reached`` (the estimated pose reached, its error from the placement, the
 arm angles), ``relocalized`` (the correction applied: dx, dy, dyaw, pairs, rms;
-none when the frame did not register). RUNNING while nothing is ranked yet; FAILURE when the ranking is
-empty or no placement is feasible; SUCCESS once base and arm are there. The
+none when the frame did not register), ``redrive`` (the distance to drive again), ``reaimed`` (how far the
+camera stood off its goal, m; the new angles, none when out of reach). RUNNING while nothing is ranked yet;
+FAILURE when the ranking is empty or no placement is feasible; SUCCESS once base and arm are there. The
 base stops and the arm holds when the skill ends.
 """
 
@@ -51,13 +63,14 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.geometry import rotation_matrix
 from marsupial.trees.skill import NodeParams, Skill
 from marsupial.world.capabilities import HasArmModel, HasBase
 
 from ..uav_docking.team import phase_event
 from .base_drive import pursuit_step, turn_step
 from .insertion import level_insertion_tcp
-from .placement import RHO_M, CameraModel, Placement, PlacementParams, plan_placements
+from .placement import RHO_M, CameraModel, Placement, PlacementParams, aim_camera, camera_goal, plan_placements
 from .registration import relocalize_base
 from .scan import APERTURES, VOLUMETRIC_MAP, fresh_frame
 from .volumetric import sensor_cloud
@@ -66,6 +79,10 @@ LOOK_POSES = ((0.0, -0.061, 1.616, 0.0, 0.976, 0.0), (0.0, 0.009, 1.54, 0.0, 1.2
 """MMS arm angles (rad) with the camera 0.35 m ahead of and 0.50 m above ``arm_base_link`` (0.10 m beyond the base's
 front edge, 0.89 m up), pitched 55° and 70° down (closed-form IK): together they see the ground from the base's
 front edge to ≈1.8 m ahead of the camera."""
+
+REDRIVE_CONE = math.radians(30.0)
+"""The placement is driven to again only within this angle (rad) of the heading (pure pursuit turns on the spot
+beyond 60°)."""
 
 PLACEMENT = "placement"
 """Blackboard key (under the robot's name) of the chosen :class:`~.placement.Placement`."""
@@ -111,6 +128,16 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
         """At the placement, register a depth frame against M and correct the base estimate by it (the paper's
         SLAM keeps the map and the pose consistent; the wheel odometry alone drifts centimetres on the drive,
         :mod:`.registration`); false: keep the odometry."""
+        redrive_distance: float = Field(0.15, gt=0.0)
+        """After the relocalisation, the base drives to the placement again when it lies more than this (m) ahead
+        (and within 30° of the heading): a wheel slipping on an obstacle the MMS does not sense left it short."""
+        max_redrives: int = Field(2, ge=0)
+        """At most this many drives again to the placement."""
+        reaim: bool = True
+        """At the placement (after ``relocalize``), solve the arm's angles again from the base estimate so that the
+        camera stands at the placement's camera goal; false: keep the placement's angles."""
+        centre_view: bool = True
+        """Centre the camera's view across n̂ on the aperture's contour (its bounding box) instead of on m_A."""
         camera: str = "camera"
         """The eye-in-hand RGB-D camera."""
 
@@ -127,6 +154,10 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
                       for pan in self.params.look_pan]
         self.arrived_at: float | None = None  # at the present ground-looking pose since
         self.placed_at: float | None = None  # at the placement, arm at its angles, since
+        self.view_q: np.ndarray | None = None  # the arm's viewing angles: the placement's, then re-aimed
+        self.camera_R: np.ndarray | None = None  # R_nav_optical of the placement's camera goal
+        self.settled = False  # relocalised (and re-aimed) at the placement
+        self.redrives = 0
 
     def step(self) -> Status:
         if self.stage == "look":
@@ -139,12 +170,20 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
         estimate = self.robot.estimate()
         distance = float(np.hypot(*(goal[:2] - estimate.position[:2])))
         yaw_error = math.remainder(goal[2] - estimate.yaw, math.tau)
-        self.robot.set_joint_targets(self.placement.q)
-        joint_error = float(np.max(np.abs(self.robot.joint_positions() - self.placement.q)))
+        return self._at_placement(distance, yaw_error)
+
+    def _at_placement(self, distance: float, yaw_error: float) -> Status:
+        """The base stands at the placement: the arm to the viewing angles, then relocalise and re-aim once."""
+        assert self.placement is not None
+        p = self.params
+        view_q = self.placement.q if self.view_q is None else self.view_q
+        self.robot.set_joint_targets(view_q)
+        joint_error = float(np.max(np.abs(self.robot.joint_positions() - view_q)))
         if joint_error > p.joint_tolerance:
             self.feedback_message = f"arm to the viewing pose: {joint_error:.3f} rad"
             return Status.RUNNING
         if self.placed_at is None:
+            estimate = self.robot.estimate()
             phase_event(self, "reached", pose=[round(float(x), 3) for x in (*estimate.position[:2], estimate.yaw)],
                         error_m=round(distance, 3), yaw_error=round(yaw_error, 3),
                         q=[round(float(x), 3) for x in self.robot.joint_positions()])
@@ -152,8 +191,15 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
             if p.relocalize:
                 self.feedback_message = "at the placement: relocalising against M"
                 return Status.RUNNING
-        if p.relocalize and not self._relocalize():
-            return Status.RUNNING
+        if not self.settled:
+            if p.relocalize and not self._relocalize():
+                return Status.RUNNING
+            self.settled = True
+            if self._redrive():
+                return Status.RUNNING
+            if p.reaim and self._reaim():
+                self.feedback_message = "re-aiming the camera at the placement's goal"
+                return Status.RUNNING
         self.feedback_message = f"at the placement ({distance:.2f} m, {yaw_error:+.2f} rad off), aperture in view"
         return Status.SUCCESS
 
@@ -182,8 +228,49 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
             return False
         occupancy = self.read(f"{self.robot_name}/{VOLUMETRIC_MAP}")
         found = relocalize_base(self.robot, sensor_cloud(taken[0], self.params.stride_px, self.params.max_range),
-                                occupancy)
+                                occupancy, searched=True)
         phase_event(self, "relocalized", correction=found.summary() if found is not None else None)
+        return True
+
+    def _redrive(self) -> bool:
+        """Whether the base must drive to the placement again: it lies more than ``redrive_distance`` ahead of the
+        corrected estimate, within 30° of its heading (never behind: pure pursuit would turn the base about with
+        the arm out at the wall), at most ``max_redrives`` times."""
+        assert self.placement is not None
+        p = self.params
+        estimate = self.robot.estimate()
+        offset = self.placement.pose[:2] - estimate.position[:2]
+        c, s = math.cos(estimate.yaw), math.sin(estimate.yaw)
+        ahead, aside = c * offset[0] + s * offset[1], -s * offset[0] + c * offset[1]
+        if self.redrives >= p.max_redrives or ahead <= p.redrive_distance:
+            return False
+        if abs(math.atan2(aside, ahead)) > REDRIVE_CONE:
+            return False
+        self.redrives += 1
+        self.stage, self.placed_at, self.settled = "drive", None, False
+        phase_event(self, "redrive", distance=round(float(np.hypot(*offset)), 3))
+        self.feedback_message = f"driving to the placement again: {float(np.hypot(*offset)):.2f} m"
+        return True
+
+    def _reaim(self) -> bool:
+        """Solve the camera's goal again from the base estimate (:func:`~.placement.aim_camera`); True when the arm
+        has to move to the new angles."""
+        assert self.placement is not None and self.camera_R is not None
+        estimate = self.robot.estimate()
+        pose = (*estimate.position[:2], estimate.yaw)
+        camera = CameraModel.of_port(self.robot.sensor(self.params.camera))
+        p_opt = self.placement.camera_position
+        q_now = self.robot.joint_positions()
+        q = aim_camera(self.robot.arm_kinematics, camera, self.robot.arm_mount(), pose, float(estimate.position[2]),
+                       p_opt, self.camera_R, q_now)
+        p_M, q_M = self.robot.arm_base_pose()  # where the camera stands now, as the corrected estimate has it
+        p_link, R_link = self.robot.arm_kinematics.forward(q_now, camera.link)
+        off = float(np.linalg.norm(p_M + rotation_matrix(q_M) @ (p_link + R_link @ camera.offset) - p_opt))
+        phase_event(self, "reaimed", camera_off_m=round(off, 4),
+                    q=None if q is None else [round(float(x), 3) for x in q])
+        if q is None or float(np.max(np.abs(q - q_now))) <= self.params.joint_tolerance:
+            return False
+        self.view_q = q
         return True
 
     def _look(self) -> Status:
@@ -241,7 +328,7 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
             CameraModel.of_port(self.robot.sensor(p.camera)), self.robot.arm_mount(),
             (*estimate.position[:2], estimate.yaw), self.robot.joint_positions(), float(estimate.position[2]),
             self.context.rng(f"{self.name}/placement"), params, self._tool_goals(aperture.m_A, aperture.normal_nav),
-            refused,
+            refused, aperture.candidate.box_centre_nav if p.centre_view else None,
         )
         phase_event(self, "placement", aperture=[round(float(x), 3) for x in aperture.m_A], feasible=len(placements),
                     placement=placements[0].summary() if placements else None, refused=dict(refused))
@@ -250,6 +337,7 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
             self.feedback_message = f"no feasible base placement among {p.samples} samples in the cone ({why})"
             return Status.FAILURE
         self.placement, self.stage = placements[0], "drive"
+        self.camera_R = camera_goal(aperture.m_A, aperture.normal_nav, p.standoff)[1]
         self.write(f"{self.robot_name}/{PLACEMENT}", self.placement)
         self.robot.stop()
         self.feedback_message = f"placement chosen among {len(placements)} feasible"

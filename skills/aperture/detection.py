@@ -169,6 +169,13 @@ class ApertureCandidate:
         """The aperture's centre in the navigation frame (m)."""
         return self.frame.to_nav(self.centre_I)
 
+    @property
+    def box_centre_nav(self) -> np.ndarray:
+        """The centre of C_a's bounding box in I, on the plane, in the navigation frame (m): the point a view
+        of the whole opening is centred on (a U's centroid lies off it, toward its bar)."""
+        mid = (self.contour_px.min(axis=0) + self.contour_px.max(axis=0)) / 2.0
+        return self.frame.to_nav(self.view.pixel_to_I(mid))
+
     def mask(self) -> np.ndarray:
         """The aperture's region in I (uint8, 255 inside C_a): the input of :func:`~.profile.profile_analysis`."""
         mask = np.zeros(self.view.binary.shape, np.uint8)

@@ -21,6 +21,11 @@ Here, with numpy and the arm's pinocchio model:
    every candidate at once (vectorised numpy);
 3. :func:`camera_goal` — the eye-in-hand camera ``standoff`` in front of t_a
    along n̂, its optical axis along −n̂ (looking at t_a), image rows level;
+   with a ``view_point`` (the centre of the aperture's contour) the camera is
+   moved across n̂ in front of it, t_a still in view: m_A can lie 10–15 cm
+   off a U's centre, and a camera 0.4 m from the wall in front of it saw
+   the far arm of a 30 cm U cut by the image border (analysed again, it was
+   not detected);
 4. the camera link's goal in each candidate's arm frame M, solved by the
    closed-form IK of the spherical-wrist arm (:class:`~..uav_docking.ik_engine.ClosedFormIK`
    on the pinocchio model) within the joint limits, and checked by pinocchio
@@ -55,7 +60,7 @@ from typing import Any
 import numpy as np
 
 from ..navigation import Footprint
-from ..uav_docking.ik_engine import ClosedFormIK
+from ..uav_docking.ik_engine import ClosedFormIK, DlsIK
 from .detection import CAMERA_LINK
 from .volumetric import FREE, OCCUPIED, UNKNOWN, VolumetricMap
 
@@ -290,6 +295,16 @@ def camera_goal(target: np.ndarray, normal: np.ndarray, standoff: float) -> tupl
     return np.asarray(target, dtype=float) + standoff * n, np.column_stack((np.cross(y, z), y, z))
 
 
+def view_target(target: np.ndarray, normal: np.ndarray, view_point: np.ndarray | None) -> np.ndarray:
+    """The point (nav, m) the camera looks at: ``view_point`` moved along n̂ to ``target``'s depth (none: ``target``)."""
+    target = np.asarray(target, dtype=float)
+    if view_point is None:
+        return target
+    n = np.asarray(normal, dtype=float) / np.linalg.norm(normal)
+    point = np.asarray(view_point, dtype=float)
+    return point + float((target - point) @ n) * n
+
+
 def arm_frames(poses: np.ndarray, ground_z: float, arm_mount: tuple[np.ndarray, np.ndarray]
                ) -> tuple[np.ndarray, np.ndarray]:
     """Frame M of the arm at each base pose ``(n, 3)``: positions ``(n, 3)`` (nav, m) and ``R_nav_M`` ``(n, 3, 3)``.
@@ -323,7 +338,7 @@ def plan_placements(target: np.ndarray, normal: np.ndarray, occupancy: Volumetri
                     camera: CameraModel, arm_mount: tuple[np.ndarray, np.ndarray], start: Sequence[float],
                     q_ref: np.ndarray, ground_z: float, rng: np.random.Generator,
                     params: PlacementParams | None = None, tool_goals: Sequence[np.ndarray] = (),
-                    refused: Counter[str] | None = None) -> list[Placement]:
+                    refused: Counter[str] | None = None, view_point: np.ndarray | None = None) -> list[Placement]:
     """Feasible base placements to see and reach the aperture at ``target`` (§IV-D), lowest cost first.
 
     Args:
@@ -343,6 +358,8 @@ def plan_placements(target: np.ndarray, normal: np.ndarray, occupancy: Volumetri
         refused: if given, counts why candidates were dropped, by the first check each failed (``sight blocked``
             for all of them, ``footprint blocked``, ``camera out of reach``, ``insertion out of reach``,
             ``camera off its goal``, ``aperture out of view``).
+        view_point: the point (nav, m) the camera's view is centred on across n̂ (its distance from the plane
+            stays ``standoff`` from t_a's); none, or with the sight from there to t_a blocked in M: t_a.
 
     Returns:
         :class:`Placement` s (empty when the cone is blocked, unreachable, or the camera's sight is blocked).
@@ -352,7 +369,9 @@ def plan_placements(target: np.ndarray, normal: np.ndarray, occupancy: Volumetri
     target = np.asarray(target, dtype=float)
     start_pose = np.asarray(start, dtype=float)
     q_ref = np.asarray(q_ref, dtype=float)
-    p_opt, R_opt = camera_goal(target, normal, params.standoff)
+    p_opt, R_opt = camera_goal(view_target(target, normal, view_point), normal, params.standoff)
+    if view_point is not None and not sight_clear(occupancy, p_opt, target, keep_out=2.0 * occupancy.resolution):
+        p_opt, R_opt = camera_goal(target, normal, params.standoff)
     if not sight_clear(occupancy, p_opt, target, keep_out=2.0 * occupancy.resolution):
         refused["sight blocked"] += params.samples
         return []
@@ -396,6 +415,29 @@ def plan_placements(target: np.ndarray, normal: np.ndarray, occupancy: Volumetri
             continue
         placements.append(Placement(poses[i], solution.q[i], reached[0], float(costs[i])))
     return sorted(placements, key=lambda pl: pl.cost)
+
+
+def aim_camera(kinematics: Any, camera: CameraModel, arm_mount: tuple[np.ndarray, np.ndarray], pose: Sequence[float],
+               ground_z: float, p_opt: np.ndarray, R_opt: np.ndarray, q_ref: np.ndarray) -> np.ndarray | None:
+    """Arm angles (rad) placing the camera's optical centre at ``p_opt`` with ``R_nav_optical`` ``R_opt`` (nav) from
+    the base pose ``pose`` ``(x, y, yaw)`` (nav, m, rad), found from ``q_ref`` by damped least squares (the
+    nearest solution: the closed-form branch nearest ``q_ref`` turns the wrist by a radian near its singularity),
+    checked by forward kinematics; ``None`` out of reach.
+
+    The base stops within its tolerances of a placement, and the relocalisation then moves the estimate by the
+    odometry's drift: solved again from there, the camera stands where the placement put it.
+    """
+    p_M, R_M = arm_frames(np.asarray(pose, dtype=float)[None], ground_z, arm_mount)
+    R_link = np.asarray(R_opt, dtype=float) @ camera.R_link_optical.T
+    p_link = np.asarray(p_opt, dtype=float) - R_link @ camera.offset
+    q, ok = DlsIK(kinematics, camera.link).solve_one(R_M[0].T @ (p_link - p_M[0]), R_M[0].T @ R_link,
+                                                     np.asarray(q_ref, dtype=float))
+    if not ok:
+        return None
+    reached = _camera_at(kinematics, camera, q, p_M[0], R_M[0])
+    if reached is None or np.linalg.norm(reached[0] - p_opt) > 1e-4:
+        return None
+    return q
 
 
 def _camera_at(kinematics: Any, camera: CameraModel, q: np.ndarray, p_M: np.ndarray, R_M: np.ndarray

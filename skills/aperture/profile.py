@@ -22,6 +22,11 @@ iii) while V holds fewer than N_v configurations, each pair of F in turn:
      C_m slides along l one pixel at a time, alternately toward either end
      (+1, -1, +2, -2, … px), until its edge reaches the end point; the first
      shift that fits joins V. V is bounded by N_v.
+iv)  (a departure, ``centre_radius_px``) each configuration of V is moved, at its angle θ, to where C_m^t keeps
+     the largest distance from C_a within that radius (:func:`centred`): V's configurations are the first
+     that fit, which at a U put the MAV's top 4.5 mm under the tongue with 2.2 cm of clearance to spare, and
+     the few millimetres the arm and the grasp add on the way touched it. The centred configurations come
+     first (duplicates dropped), the uncentred ones fill V up to N_v after them.
 
 Departures (the paper gives no numbers or details for these):
 
@@ -65,6 +70,8 @@ class ProfileParams:
         clearance_px: least distance (px) kept between C_m^t and C_a (0: the boundaries just do not cross).
         pair_spacing_px: spacing (px) of the points of C_a that the pairs of G are made of.
         chunk: configurations checked per vectorised batch in step ii (early exit at N_v).
+        centre_radius_px: step iv, the farthest (px) a configuration is moved to keep C_m^t off C_a (0: the
+            paper's configurations as found).
     """
 
     w1: float = 1.0
@@ -73,9 +80,11 @@ class ProfileParams:
     clearance_px: float = 1.0
     pair_spacing_px: float = 2.0
     chunk: int = 256
+    centre_radius_px: float = 24.0
 
     def __post_init__(self) -> None:
-        if self.n_valid < 1 or self.chunk < 1 or self.pair_spacing_px <= 0 or self.clearance_px < 0:
+        if (self.n_valid < 1 or self.chunk < 1 or self.pair_spacing_px <= 0 or self.clearance_px < 0
+                or self.centre_radius_px < 0):
             raise ValueError(f"invalid profile parameters: {self}")
 
 
@@ -255,7 +264,8 @@ def profile_analysis(
 
     Returns:
         V: at most ``params.n_valid`` configurations, those of step ii first (by rank), then those of the
-        sliding search (step iii); empty when the MAV fits nowhere.
+        sliding search (step iii); with ``centre_radius_px`` each of them centred (step iv) first, then the
+        ones as found; empty when the MAV fits nowhere.
     """
     params = params or ProfileParams()
     c_a = aperture_contour(aperture_mask)
@@ -276,7 +286,7 @@ def profile_analysis(
         for n in in_g[fits][: params.n_valid - len(valid)]:
             valid.append(_configuration(pairs[n], float(scores[n]), mids[n], float(thetas[n]), 0.0))
         if len(valid) >= params.n_valid:
-            return valid
+            return _with_centred(valid, interior, boundary, params)
         failed.extend(int(n) for n in in_g[~fits])
     for k in failed:  # step iii: the sliding search along each initially-failed pair
         length = float(np.linalg.norm(pairs[k, 1] - pairs[k, 0]))
@@ -292,4 +302,49 @@ def profile_analysis(
                                         float(shifts[first[0]])))
             if len(valid) >= params.n_valid:
                 break
-    return valid
+    return _with_centred(valid, interior, boundary, params)
+
+
+def _margin(interior: _Interior, boundary: np.ndarray, centres: np.ndarray, theta: float) -> np.ndarray:
+    """The least distance transform (px) over C_m's ``boundary`` placed at each of ``centres`` ``(k, 2)``, turned by
+    ``theta``."""
+    return interior.depth(_place(boundary, centres, np.full(len(centres), theta))).min(axis=1)
+
+
+def centred(config: LaunchConfiguration, interior: _Interior, boundary: np.ndarray, radius: float
+            ) -> LaunchConfiguration:
+    """``config`` moved, at its angle, to the centre within ``radius`` (px) at which C_m^t (``boundary``, C_m's
+    boundary aligned with +u) keeps the largest distance from C_a (step iv, a departure).
+
+    A grid of 2 px over the disc, then of 1 px about its best; of equal margins the nearest to ``config``'s centre.
+    Its ``pair_px``, ``score`` and ``shift_px`` stay those it was found with.
+    """
+    start = np.asarray(config.center_px, dtype=float)
+    best, best_margin = start, float(_margin(interior, boundary, start[None], config.angle)[0])
+    for step, reach in ((2.0, radius), (1.0, 2.0)):
+        k = np.arange(-math.floor(reach / step), math.floor(reach / step) + 1) * step
+        offsets = np.stack(np.meshgrid(k, k), axis=-1).reshape(-1, 2)
+        offsets = offsets[np.hypot(offsets[:, 0], offsets[:, 1]) <= reach]
+        centres = best + offsets
+        if step < 2.0:
+            centres = centres[np.linalg.norm(centres - start, axis=1) <= radius]
+        margins = _margin(interior, boundary, centres, config.angle)
+        top = np.flatnonzero(margins >= margins.max() - 1e-6)
+        pick = top[np.argmin(np.linalg.norm(centres[top] - start, axis=1))]
+        if margins[pick] > best_margin + 1e-6:
+            best, best_margin = centres[pick], float(margins[pick])
+    return LaunchConfiguration((float(best[0]), float(best[1])), config.angle, config.pair_px, config.score,
+                               config.shift_px)
+
+
+def _with_centred(valid: list[LaunchConfiguration], interior: _Interior, boundary: np.ndarray,
+                  params: ProfileParams) -> list[LaunchConfiguration]:
+    """Step iv: V's configurations centred (duplicates dropped), then the uncentred ones, at most N_v."""
+    if params.centre_radius_px <= 0 or not valid:
+        return valid
+    out: list[LaunchConfiguration] = []
+    for config in [centred(c, interior, boundary, params.centre_radius_px) for c in valid] + valid:
+        if not any(math.dist(config.center_px, o.center_px) < 0.5 and abs(config.angle - o.angle) < 1e-6
+                   for o in out):
+            out.append(config)
+    return out[: params.n_valid]
