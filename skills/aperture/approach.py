@@ -164,7 +164,7 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
             return self._look()
         if self.placement is None:
             return self._plan()
-        p, goal = self.params, self.placement.pose
+        goal = self.placement.pose
         if self.stage != "arm" and self._move_base(goal):
             return Status.RUNNING
         estimate = self.robot.estimate()

@@ -212,8 +212,8 @@ def register_searched(points: np.ndarray, reference: np.ndarray, pivot: np.ndarr
     if best is None or best is found or best.pairs < enough:
         return best if best is not None and best.pairs >= enough else None
     # registered again from where the best ended, about the pivot moved with it: R_r R_b (p − c) + c + t_b + t_r
-    moved = _moved(points, pivot, np.r_[best.translation, best.yaw])
-    refined = register_planar(moved, reference, pivot + np.r_[best.translation, 0.0],
+    aligned = _moved(points, pivot, np.r_[best.translation, best.yaw])
+    refined = register_planar(aligned, reference, pivot + np.r_[best.translation, 0.0],
                               replace(params, iterations=params.refine_iterations))
     if refined is None or refined.pairs < enough:
         return best
