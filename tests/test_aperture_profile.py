@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 import pytest
+from shapely import affinity
 from shapely.geometry import Point, Polygon, box
 
 from marsupial.skills.aperture import ProfileParams, mav_contour, mav_silhouette, profile_analysis
@@ -113,4 +114,26 @@ def test_the_first_configuration_is_moved_to_keep_the_mav_off_the_rim():
     assert margin(centred[0]) >= max(margin(c) for c in found) - 0.002  # as far off as any the search found
     assert centred[0].angle == found[0].angle and centred[0].pair_px == found[0].pair_px
     assert len({(c.center_px, c.angle) for c in centred}) == len(centred)  # no duplicates
-    assert found[0] in centred  # the configurations as found follow the centred ones
+
+
+def test_step_iv_fills_v_with_configurations_that_centre_apart():
+    # the first fits the search finds are mostly one chord's neighbours at one angle (here 8 of 10 at -75 deg, the
+    # MAV on its side), which centre to one place; counting only those that centre apart, V keeps the level-ish
+    # fits too (the arm could not turn the MAV level from -75 deg in two insertion trials)
+    outline = affinity.scale(aperture_outline("amoeba"), 0.5166, 0.5166, origin="centroid")
+    depth = 0.5
+    mask, origin = rasterised(outline, depth / K[0, 0])
+    c_m = mav_contour(depth, K)
+    found = profile_analysis(mask, c_m, ProfileParams(centre_radius_px=0.0))
+    centred = profile_analysis(mask, c_m)
+    assert len(centred) == ProfileParams().n_valid
+
+    def degrees(configs):
+        return {round(math.degrees(c.angle)) for c in configs}
+
+    assert len(degrees(found)) <= 3 and len(degrees(centred)) == len(centred)
+    assert sum(abs(a) < 20 for a in degrees(centred)) > sum(abs(a) < 20 for a in degrees(found))
+    for config in centred:
+        placed = Polygon(np.c_[origin[0] + config.placed(c_m)[:, 0] * depth / K[0, 0],
+                               origin[1] - config.placed(c_m)[:, 1] * depth / K[0, 0]])
+        assert outline.contains(placed)

@@ -26,7 +26,10 @@ iv)  (a departure, ``centre_radius_px``) each configuration of V is moved, at it
      the largest distance from C_a within that radius (:func:`centred`): V's configurations are the first
      that fit, which at a U put the MAV's top 4.5 mm under the tongue with 2.2 cm of clearance to spare, and
      the few millimetres the arm and the grasp add on the way touched it. The centred configurations come
-     first (duplicates dropped), the uncentred ones fill V up to N_v after them.
+     first (duplicates dropped), the uncentred ones fill V up to N_v after them. With step iv a
+     configuration within ``distinct_angle`` and ``centre_radius_px`` of one already in V does not count
+     toward N_v: the first fits are mostly one chord's neighbours, which centre to one place, and V then
+     held three poses, all on the MAV's side where a level fit existed (the arm could not turn it level).
 
 Departures (the paper gives no numbers or details for these):
 
@@ -72,6 +75,8 @@ class ProfileParams:
         chunk: configurations checked per vectorised batch in step ii (early exit at N_v).
         centre_radius_px: step iv, the farthest (px) a configuration is moved to keep C_m^t off C_a (0: the
             paper's configurations as found).
+        distinct_angle: with step iv, a configuration within this angle (rad) of one already in V and within
+            ``centre_radius_px`` of it does not count toward N_v (it would centre to the same place).
     """
 
     w1: float = 1.0
@@ -81,10 +86,11 @@ class ProfileParams:
     pair_spacing_px: float = 2.0
     chunk: int = 256
     centre_radius_px: float = 24.0
+    distinct_angle: float = math.radians(1.0)
 
     def __post_init__(self) -> None:
         if (self.n_valid < 1 or self.chunk < 1 or self.pair_spacing_px <= 0 or self.clearance_px < 0
-                or self.centre_radius_px < 0):
+                or self.centre_radius_px < 0 or not 0.0 <= self.distinct_angle <= math.pi / 2):
             raise ValueError(f"invalid profile parameters: {self}")
 
 
@@ -283,10 +289,9 @@ def profile_analysis(
     for start in range(0, len(pairs), params.chunk):  # steps i and ii, in rank order
         in_g = start + np.flatnonzero(_inside_segments(pairs[start : start + params.chunk], interior))
         fits = (interior.depth(_place(boundary, mids[in_g], thetas[in_g])) > need).all(axis=1)
-        for n in in_g[fits][: params.n_valid - len(valid)]:
-            valid.append(_configuration(pairs[n], float(scores[n]), mids[n], float(thetas[n]), 0.0))
-        if len(valid) >= params.n_valid:
-            return _with_centred(valid, interior, boundary, params)
+        for n in in_g[fits]:
+            if _admitted(_configuration(pairs[n], float(scores[n]), mids[n], float(thetas[n]), 0.0), valid, params):
+                return _with_centred(valid, interior, boundary, params)
         failed.extend(int(n) for n in in_g[~fits])
     for k in failed:  # step iii: the sliding search along each initially-failed pair
         length = float(np.linalg.norm(pairs[k, 1] - pairs[k, 0]))
@@ -298,9 +303,9 @@ def profile_analysis(
         fits = (interior.depth(_place(boundary, centres, np.full(len(shifts), thetas[k]))) > need).all(axis=1)
         first = np.flatnonzero(fits)
         if len(first):
-            valid.append(_configuration(pairs[k], float(scores[k]), centres[first[0]], float(thetas[k]),
-                                        float(shifts[first[0]])))
-            if len(valid) >= params.n_valid:
+            config = _configuration(pairs[k], float(scores[k]), centres[first[0]], float(thetas[k]),
+                                    float(shifts[first[0]]))
+            if _admitted(config, valid, params):
                 break
     return _with_centred(valid, interior, boundary, params)
 
@@ -335,6 +340,17 @@ def centred(config: LaunchConfiguration, interior: _Interior, boundary: np.ndarr
             best, best_margin = centres[pick], float(margins[pick])
     return LaunchConfiguration((float(best[0]), float(best[1])), config.angle, config.pair_px, config.score,
                                config.shift_px)
+
+
+def _admitted(config: LaunchConfiguration, valid: list[LaunchConfiguration], params: ProfileParams) -> bool:
+    """Append ``config`` to V (``valid``) unless, with step iv, it would centre where one of V does (an angle
+    within ``distinct_angle`` rad and a centre within ``centre_radius_px`` px of it); whether V is now full."""
+    redundant = params.centre_radius_px > 0 and any(
+        abs(config.angle - o.angle) <= params.distinct_angle
+        and math.dist(config.center_px, o.center_px) <= params.centre_radius_px for o in valid)
+    if not redundant:
+        valid.append(config)
+    return len(valid) >= params.n_valid
 
 
 def _with_centred(valid: list[LaunchConfiguration], interior: _Interior, boundary: np.ndarray,
