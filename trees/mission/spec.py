@@ -60,15 +60,26 @@ class WorldSpec(BaseModel):
     )
 
 
+MAX_POSE_VALUE = 1000.0
+"""Largest magnitude (m; rad for a yaw) of a start pose's entries and spreads: pybullet computes contacts in single
+precision, whose step at 1 km is 0.06 mm and grows with the distance."""
+
+PoseValue = Annotated[float, Field(ge=-MAX_POSE_VALUE, le=MAX_POSE_VALUE)]
+
+
 class TeamMember(BaseModel):
     """A robot of the team: its kind, start pose and options."""
 
     model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
     robot: str = Field(description="Robot kind (see world/robots ROBOT_KINDS).")
-    pose: list[float] | None = Field(
-        None, description="Start pose [x, y], [x, y, yaw] (ground robots) or [x, y, z, yaw] (m, rad, world frame)."
+    pose: list[PoseValue] | None = Field(
+        None,
+        description=(
+            "Start pose [x, y], [x, y, yaw] (ground robots) or [x, y, z, yaw] (m, rad, world frame), each within "
+            "±1000."
+        ),
     )
-    pose_spread: list[float] | None = Field(
+    pose_spread: list[PoseValue] | None = Field(
         None,
         description=(
             "[dx, dy, dyaw] >= 0 (m, m, rad): the start pose is `pose` plus a uniform offset within ± each on x, y "
