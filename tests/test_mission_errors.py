@@ -142,6 +142,18 @@ def test_bad_overrides_list_close_names():
     )
 
 
+def test_an_override_reaches_a_node_of_the_tree_by_its_index():
+    # the path walks the data as written: tree.sequence is the node's list of children (it raised a TypeError)
+    from marsupial.trees.mission.overrides import apply_overrides
+
+    data = {"mission": "m", "tree": {"sequence": [{"skill": "wait"}, {"skill": "goto", "name": "go"}]}}
+    apply_overrides(data, {"tree.sequence.1.params": "{x: 2}"})
+    assert data["tree"]["sequence"][1] == {"skill": "goto", "name": "go", "params": {"x": 2}}
+    with pytest.raises(MissionError, match="unknown key 'tree.sequence.sequence'; expected one of tree.sequence.0, "
+                                           "tree.sequence.1"):
+        apply_overrides(data, {"tree.sequence.sequence.1.params": "{x: 2}"})
+
+
 def test_override_with_a_wrong_type_points_at_the_key_and_names_the_override():
     with pytest.raises(MissionError) as caught:
         load_mission(ALL_NODES, {"world.seed": "abc"})

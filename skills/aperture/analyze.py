@@ -60,6 +60,9 @@ class AnalyzeAperture(Skill["AnalyzeAperture.Params"]):
         """The detection must lie this close (m) to the ranked aperture's centre."""
         clearance_px: float = Field(ProfileParams().clearance_px, ge=0.0)
         """Pixels C_m must keep from C_a in the profile analysis."""
+        centre_radius_px: float = Field(ProfileParams().centre_radius_px, ge=0.0, le=200.0)
+        """Step iv of the profile analysis (a departure, :mod:`.profile`): how far (px) a configuration may be moved
+        to keep the MAV off the rim; 0: Algorithm 1's configurations as found."""
         stride_px: int = Field(2, ge=1)
         """Every how many depth pixels of each frame a ray is inserted into M."""
         max_range: float = Field(4.0, gt=0.0)
@@ -109,7 +112,8 @@ class AnalyzeAperture(Skill["AnalyzeAperture.Params"]):
             return Status.FAILURE
         found = min(near, key=lambda c: float(np.linalg.norm(c.centre_nav - centre)))
         c_m = mav_contour(found.view.plane_depth, found.view.K)
-        configs = profile_analysis(found.mask(), c_m, ProfileParams(clearance_px=p.clearance_px))
+        profile = ProfileParams(clearance_px=p.clearance_px, centre_radius_px=p.centre_radius_px)
+        configs = profile_analysis(found.mask(), c_m, profile)
         plans = plan_launches(found, configs, LaunchParams())
         self.write(f"{self.robot_name}/{LAUNCH_PLANS}", plans)
         phase_event(self, "profile", detected=True, centre=[round(float(x), 3) for x in found.centre_nav],

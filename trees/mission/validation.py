@@ -49,14 +49,14 @@ def unwrap(tp: Any) -> Any:
             tp = get_args(tp)[0]
         elif get_origin(tp) in (Union, types.UnionType):
             members = [m for m in get_args(tp) if m is not type(None)]
-            if len(members) != 1 or _tag_map(tp):
+            if len(members) != 1 or tag_map(tp):
                 return tp
             tp = members[0]
         else:
             return tp
 
 
-def _tag_map(tp: Any) -> dict[str, Any]:
+def tag_map(tp: Any) -> dict[str, Any]:
     """Tag -> member type of a tagged (discriminated) union, ``{}`` for any other type."""
     if get_origin(tp) is Annotated:
         tp = get_args(tp)[0]
@@ -70,8 +70,8 @@ def _tag_map(tp: Any) -> dict[str, Any]:
 
 def _describe(tp: Any) -> str:
     """What a value of type ``tp`` looks like, in words ("an integer", "a node …")."""
-    if _tag_map(tp):
-        return f"a node ({one_of(_tag_map(tp))})"
+    if tag_map(tp):
+        return f"a node ({one_of(tag_map(tp))})"
     tp = unwrap(tp)
     origin = get_origin(tp)
     if origin is Literal:
@@ -103,7 +103,7 @@ def walk_location(loc: tuple[Any, ...], root: Any, data: Any) -> _LocWalk:
     path: list[Any] = []
     tp, value, model = root, data, None
     for item in loc:
-        tags = _tag_map(tp)
+        tags = tag_map(tp)
         if item in tags:  # a tagged-union member: not a YAML key
             tp = tags[item]
             continue
