@@ -209,8 +209,8 @@ def register_searched(points: np.ndarray, reference: np.ndarray, pivot: np.ndarr
         if moved is not None and (best is None or moved.pairs > best.pairs):
             best = Registration(moved.translation + shift[:2], moved.yaw, pivot, moved.pairs, moved.rms,
                                 moved.iterations)
-    if best is None or best is found or best.pairs < enough:
-        return best if best is not None and best.pairs >= enough else None
+    if best is None or best.pairs < enough:  # found, if no offset paired more, pairs fewer than enough
+        return None
     # registered again from where the best ended, about the pivot moved with it: R_r R_b (p − c) + c + t_b + t_r
     aligned = _moved(points, pivot, np.r_[best.translation, best.yaw])
     refined = register_planar(aligned, reference, pivot + np.r_[best.translation, 0.0],
