@@ -301,7 +301,7 @@ def plot_insertion(ins: dict[str, Any], img: Path, pyplot: Any, save: Any) -> st
     from shapely import affinity
     from shapely.geometry import Polygon
 
-    from marsupial.skills.aperture.silhouette import mav_silhouette
+    from marsupial.api.silhouette import mav_silhouette
 
     plt = pyplot()
     fig = plt.figure(figsize=(12, 7.5))

@@ -38,9 +38,9 @@ from typing import Any
 import numpy as np
 from bench_common import best_seconds, machine_info, print_tables, write_report  # the module next to this script
 
+from marsupial.api.kinematics import ArmKinematics
 from marsupial.skills.uav_docking.engine import STAGES, MotionEngine
 from marsupial.skills.uav_docking.ik_engine import IKEngine
-from marsupial.world.kinematics import ArmKinematics
 from marsupial.world.robots.mobile_manipulator import ARM_POSES
 
 TARGET_P95_MS = 25.0

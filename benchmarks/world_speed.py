@@ -53,9 +53,10 @@ import numpy as np
 import pybullet
 from bench_common import best_seconds, machine_info, print_tables, write_report  # the module next to this script
 
+from marsupial.api.model import Intrinsics
 from marsupial.world import World
 from marsupial.world.sensors.base import SensorConfig
-from marsupial.world.sensors.camera import Camera, Intrinsics
+from marsupial.world.sensors.camera import Camera
 
 TARGET_RTF_WITHOUT_CAMERA = 50.0
 TARGET_RTF_WITH_CAMERA = 3.0

@@ -29,6 +29,7 @@ def run(
     until: float | None = None,
     record_images: bool = False,
     progress: bool = False,
+    isolate: bool = False,
 ) -> RunResult:
     """Run ``mission`` (a shipped name or a ``.yaml`` path) to its end, as ``marsupial run`` does.
 
@@ -40,6 +41,7 @@ def run(
         until: time limit in simulated seconds (default: the mission's ``run.until``).
         record_images: record the camera frames skills log.
         progress: print the progress line and the summary table.
+        isolate: run the tree and its skills in a process of their own (``--isolate``).
 
     Returns the :class:`~marsupial.trees.runner.RunResult` (``outcome``,
     ``sim_time``, ``metrics``, ``log_path`` …). Bad input raises
@@ -52,7 +54,7 @@ def run(
     loaded = load_mission(mission, overrides)
     log_path = default_log_path(loaded.name) if log is True else Path(log) if log else None
     return run_mission(loaded, seed=seed, log_path=log_path, until=until, progress=progress,
-                       record_images=record_images)
+                       record_images=record_images, isolate=isolate)
 
 
 def read_log(path: str | Path) -> RunLog:

@@ -1,12 +1,12 @@
 """Where a robot's sensors are, from its own model and estimate: mounts, scan echoes, camera poses (numpy only).
 
 Skills and conditions know a sensor's pose only as a robot's computer does:
-the mount its URDF declares (:meth:`~marsupial.world.onboard.Onboard.link_offset`
+the mount its URDF declares (:meth:`~marsupial.api.views.RobotView.link_offset`
 plus the sensor's ``offset`` and optical/sensor rotation), composed with the
 robot's onboard estimate. Frames:
 
 - *body*: the frame the robot's estimate describes — ``base_footprint`` for
-  a ground robot (:class:`~marsupial.world.onboard.WheeledOnboard`), the
+  a ground robot (:class:`~marsupial.api.views.WheeledView`), the
   base link for a quadrotor;
 - *nav*: the estimate's navigation frame (``odom`` / ``map``).
 
@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from marsupial.world.capabilities import HasBase
+from marsupial.api.capabilities import HasBase
 
 
 def sensor_mount(

@@ -22,8 +22,8 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.api.capabilities import HasBase, Rotorcraft
 from marsupial.trees.skill import NodeParams, Skill
-from marsupial.world.capabilities import HasBase, Rotorcraft
 
 #: capabilities of the robots the skills below accept
 AERIAL: tuple[type, ...] = (Rotorcraft,)

@@ -53,9 +53,9 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.api.capabilities import HasBase, HasLidar
 from marsupial.sensing import body_pose, in_nav_frame, scan_in_body, sensor_mount
 from marsupial.trees.skill import NodeParams, Skill
-from marsupial.world.capabilities import HasBase, HasLidar
 
 MAX_SPEED = 2.0  # m/s, UGV longitudinal speed limit, Narváez §V-B-1
 DOCKING_SPEED = 0.5  # m/s, UGV speed limit during docking, Narváez §V-B-1
@@ -402,6 +402,7 @@ class Navigate(Skill["Navigate.Params"]):
         """Fail when the progress along the path has not grown by 0.1 m for this long (s); none: never."""
 
     robot_kinds = (HasBase, HasLidar)  # the wheeled robots with a planar LiDAR
+    sensors = ("lidar",)
     claims = ("base",)  # the base only: a carrier's arm belongs to the docking skills
     writes = ("{robot}/path_progress",)
 

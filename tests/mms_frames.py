@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import math
 
+from live_view import live_view
+
 from marsupial.skills.aperture.detection import DepthFrame, eye_in_hand_frame
 from marsupial.skills.aperture.scan import LEVEL_POSE
 from marsupial.world import World
-from marsupial.world.onboard import onboard_of
 
 WALL_FACE_Y = -0.05  # the aperture wall's face toward the approach side (0.1 m thick at y = 0)
 CAMERA_AHEAD_M = 1.057  # the camera ahead of the MMS's base centre at LEVEL_POSE (arm_base_link 0.25 m ahead)
@@ -18,7 +19,7 @@ def facing_frames(world: World, x: float, standoff: float, count: int) -> list[D
     posed through its onboard interface as ``aperture_scan`` does."""
     mms = world.add_robot("mms", pose=[x, WALL_FACE_Y - standoff - CAMERA_AHEAD_M, math.pi / 2], arm_q=LEVEL_POSE,
                           mavs=False)
-    onboard = onboard_of(mms)
+    onboard = live_view(mms.world, mms.name)
     onboard.set_joint_targets(LEVEL_POSE)
     camera = onboard.sensor("camera")
     world.step(0.3)

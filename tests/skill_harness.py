@@ -1,4 +1,11 @@
-"""Ticks mission nodes against a real world without a mission file (skill-level tests), optionally logging to MCAP."""
+"""Ticks mission nodes against a real world without a mission file (skill-level tests), optionally logging to MCAP.
+
+The nodes get what they get in a mission run: the tree side's context
+(:func:`~marsupial.trees.host.run_context`), ticked by a
+:class:`~marsupial.trees.host.TreeHost` on the messages the world side
+(:class:`~marsupial.trees.bridge.WorldBridge`) builds, its outputs applied
+to the world after every tick.
+"""
 
 from __future__ import annotations
 
@@ -9,8 +16,11 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
+from marsupial.api.ticks import TreeSetup
+from marsupial.trees.bridge import WorldBridge
+from marsupial.trees.host import TreeHost, deliver, run_context
 from marsupial.trees.recorder import Recorder
-from marsupial.trees.skill import NodeParams, RunContext
+from marsupial.trees.skill import NodeParams
 from marsupial.world import World
 from marsupial.world.scoring import Referee
 
@@ -28,21 +38,36 @@ class Harness:
         py_trees.blackboard.Blackboard.clear()
         self.world = world
         self.recorder = Recorder(log_path, {"mission_name": "harness"}) if log_path is not None else None
-        self.context = RunContext(world=world, recorder=self.recorder)
-        world.add_actor(Referee(world, self.context))
+        self.bridge = WorldBridge(world, self.recorder)
+        setup = TreeSetup("", None, {}, {}, world.seed, tick_hz, self.bridge.team(), self.bridge.priors())
+        self.context = run_context(setup)
+        world.add_actor(Referee(world, self.bridge.scores))
         self.period = 1.0 / tick_hz
+        self._host: TreeHost | None = None
 
     def node(self, cls: type, robot: str | None = None, name: str | None = None, **params) -> Behaviour:
         """A node of class ``cls`` on ``robot`` with ``params`` (validated like a mission's)."""
         validated: NodeParams = cls.Params.model_validate(params)
         return cls(name or cls.__name__.lower(), validated, self.context, robot)
 
+    def feed(self, *nodes: Behaviour) -> None:
+        """Deliver this instant's readings to the nodes' context (the sensors ``nodes`` declare), as a tick does."""
+        self.bridge.ask(pair for node in nodes for pair in node.reads_sensors)
+        deliver(self.context, self.bridge.tick_input())
+        self.context.arbiter.new_tick()
+
+    def host(self, root: Behaviour) -> TreeHost:
+        """The tree side ticking ``root`` (kept while the root is the same)."""
+        if self._host is None or self._host.root is not root:
+            self._host = TreeHost(self.context, root)
+        return self._host
+
     def run(self, root: Behaviour, seconds: float, on_tick: Callable[[], None] | None = None) -> Status:
         """Tick ``root`` until it ends or ``seconds`` of simulated time pass; returns its last status."""
+        host, bridge = self.host(root), self.bridge
         end = self.world.now + seconds
         while True:
-            self.context.arbiter.new_tick()
-            root.tick_once()
+            bridge.apply(host.tick(bridge.tick_input()))
             if self.recorder is not None:
                 robots = self.world.robots.items()
                 self.recorder.log_robot_poses(
@@ -57,9 +82,8 @@ class Harness:
             self.world.step(self.period)
 
     def stop(self, root: Behaviour) -> None:
-        """Stop a still-running tree as the runner does at the end of a run."""
-        if root.status == Status.RUNNING:
-            root.stop(Status.INVALID)
+        """Stop a still-running tree as the runner does at the end of a run (its robots left safe)."""
+        self.bridge.apply(self.host(root).stop())
 
     def close(self) -> None:
         """Finalise the log (if any)."""

@@ -18,13 +18,13 @@ import pytest
 from mms_frames import facing_frames
 from shapely.geometry import box
 
+from marsupial.api.errors import WorldError
 from marsupial.skills.aperture import DetectionParams, detect_apertures, mav_contour, profile_analysis
 from marsupial.trees.mission import load_mission
 from marsupial.trees.runner import build_world
 from marsupial.world import World
 from marsupial.world.apertures import rasterised
 from marsupial.world.disturbances import apply_disturbances
-from marsupial.world.errors import WorldError
 from marsupial.world.robots.mms import CAMERA_INTRINSICS
 
 ENTRY = {"wall": "mockup_wall_1", "x": [-2.2, -1.1], "z": [0.45, 1.25], "recesses": 1, "holes": 2}

@@ -17,13 +17,13 @@ from click.testing import CliRunner
 from shapely import affinity
 from shapely.geometry import Polygon
 
-from marsupial.skills.aperture.silhouette import mav_silhouette
+from marsupial.api.errors import UnknownNameError, WorldError
+from marsupial.api.silhouette import mav_silhouette
 from marsupial.trees.cli import cli
 from marsupial.world import World
 from marsupial.world.aperture_fit import ApertureFitSpec
 from marsupial.world.apertures import aperture_outline
 from marsupial.world.disturbances import apply_disturbances
-from marsupial.world.errors import UnknownNameError, WorldError
 
 MISSION = Path(__file__).resolve().parents[1] / "benchmarks" / "missions" / "aperture_insertion.yaml"
 TOLERANCE_M = 2e-4  # the bisection's and the angle search's precision, with room

@@ -17,6 +17,7 @@ import pytest
 from shapely.geometry import Point
 from test_aperture_detection import STANDOFF_M, WALL_FACE_Y, _frames
 
+from marsupial.api.kinematics import ArmKinematics
 from marsupial.skills.aperture import mav_contour, plan_launches, profile_analysis
 from marsupial.skills.aperture.detection import (
     DetectionParams,
@@ -37,7 +38,6 @@ from marsupial.skills.aperture.placement import (
 from marsupial.skills.aperture.profile import LaunchConfiguration
 from marsupial.skills.aperture.volumetric import FREE, SensorCloud, VolumetricMap
 from marsupial.world.apertures import aperture_outline
-from marsupial.world.kinematics import ArmKinematics
 from marsupial.world.robots.mms import CAMERA_INTRINSICS
 from marsupial.world.sensors.camera import OPTICAL_FORWARD
 

@@ -9,8 +9,8 @@ import numpy as np
 import pybullet
 import pytest
 
+from marsupial.api.tags import load_tag_bundle
 from marsupial.world import World
-from marsupial.world.apriltag_bundle import load_tag_bundle
 from marsupial.world.robots import ROBOT_KINDS
 
 pytestmark = pytest.mark.skipif("bebop2" not in ROBOT_KINDS, reason="needs the bebop2 robot kind")
@@ -27,7 +27,9 @@ def _side_px(corners):
 
 def test_bundle_is_detected_in_eye_in_hand_frames_from_0_3_to_2_m():
     bundle = load_tag_bundle()
-    detector = cv2.aruco.ArucoDetector(bundle.aruco_dictionary(), cv2.aruco.DetectorParameters())
+    detector = cv2.aruco.ArucoDetector(
+        cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, bundle.aruco_dictionary)), cv2.aruco.DetectorParameters()
+    )
     with World(seed=0) as world:
         mm = world.add_robot("mobile_manipulator", arm_pose="docking_ready")
         camera = mm.eye_in_hand

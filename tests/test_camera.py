@@ -6,10 +6,11 @@ import numpy as np
 import pybullet
 import pytest
 
+from marsupial.api.model import Intrinsics
 from marsupial.world import World
 from marsupial.world.robots.base import Robot
 from marsupial.world.sensors.base import SensorConfig
-from marsupial.world.sensors.camera import OPTICAL_DOWN, OPTICAL_FORWARD, Camera, Intrinsics
+from marsupial.world.sensors.camera import OPTICAL_DOWN, OPTICAL_FORWARD, Camera
 
 FLOOR_RGB = (128, 128, 128)  # floor of the bare world
 

@@ -6,17 +6,19 @@ The battery monitor, the LiDAR scan, the estimate against the declared plan.
 import math
 
 import pytest
+from live_view import live_view
 from skill_harness import Harness
 
+from marsupial.api.errors import UnknownNameError
 from marsupial.trees.conditions import BatteryBelow, DifficultArea, ObstacleAhead
 from marsupial.trees.skill import RunContext
 from marsupial.world import World
-from marsupial.world.errors import UnknownNameError
+from marsupial.world.priors import building_plan
 
 
 def holds(harness, cls, robot, **params):
     condition = harness.node(cls, robot, **params)
-    harness.context.arbiter.new_tick()
+    harness.feed(condition)
     return condition.check()
 
 
@@ -26,7 +28,7 @@ def test_battery_below_reads_the_whole_percent_gauge():
         harness = Harness(world)
         assert not holds(harness, BatteryBelow, "uav", threshold=0.2)  # no gauge sample yet
         world.step(0.2)
-        assert harness.context.onboard("uav").battery().soc_percent == 20.0  # 20.49 % reads 20 %
+        assert live_view(world, "uav").battery().soc_percent == 20.0  # 20.49 % reads 20 %
         assert not holds(harness, BatteryBelow, "uav", threshold=0.2)
         assert holds(harness, BatteryBelow, "uav", threshold=0.201)
 
@@ -56,7 +58,7 @@ def test_difficult_area_compares_the_estimate_with_the_declared_zones_and_door_f
 
 def test_the_building_plan_declares_structure_zones_and_paths_but_no_debris_or_target():
     with World(scene="usar_building") as world:
-        plan = RunContext(world=world).prior("building_plan")
+        plan = building_plan(world.scene)
         assert {t for e in plan.structure for t in e.tags} <= {"wall", "door_frame", "exterior"}
         assert len(plan.structure) == 42 and not any("debris" in e.tags or "target" in e.tags for e in plan.structure)
         assert plan.path("operator_path")[0] == pytest.approx([-13, -7])
@@ -64,5 +66,5 @@ def test_the_building_plan_declares_structure_zones_and_paths_but_no_debris_or_t
         door = next(e for e in plan.tagged("door_frame") if e.label == "door_1_jamb_1")
         assert door.distance([-10.74, 4.0 + 0.14 + 1.0]) == pytest.approx(1.0)
         with pytest.raises(UnknownNameError, match="building_plan"):
-            RunContext(world=world).prior("floor_plan")
+            RunContext(priors={"building_plan": plan}).prior("floor_plan")
     assert not hasattr(plan.structure[0], "body_id") and math.isfinite(plan.size[0])

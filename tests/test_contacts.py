@@ -3,9 +3,9 @@
 import pybullet
 import pytest
 
+from marsupial.api.errors import UnknownNameError
 from marsupial.world import World
 from marsupial.world.contacts import ContactMonitor, contacts_between, resolve_body
-from marsupial.world.errors import UnknownNameError
 from marsupial.world.robots.base import Robot
 
 ARM_URDF = """<robot name="test_arm">

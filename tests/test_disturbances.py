@@ -7,12 +7,13 @@ import numpy as np
 import pybullet
 import pytest
 
+from marsupial.api.errors import UnknownNameError
+from marsupial.api.model import Intrinsics
 from marsupial.world import World, WorldError
 from marsupial.world.disturbances import DisturbanceSchedule, GustyWind, When, apply_disturbances
-from marsupial.world.errors import UnknownNameError
 from marsupial.world.robots.base import Robot, yaw_of
 from marsupial.world.sensors.base import SensorConfig
-from marsupial.world.sensors.camera import OPTICAL_DOWN, Camera, Intrinsics
+from marsupial.world.sensors.camera import OPTICAL_DOWN, Camera
 
 TAG_ID = 7
 TAGS = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_APRILTAG_36h11)

@@ -6,9 +6,9 @@ import math
 import numpy as np
 import pybullet
 import pytest
+from live_view import live_view
 
 from marsupial.world import World
-from marsupial.world.onboard import onboard_of
 from marsupial.world.sensors.imu import quat_yaw
 
 
@@ -56,7 +56,7 @@ def test_autopilot_holds_the_estimate_while_the_truth_drifts():
 def test_world_commands_fly_in_the_estimate_frame_and_reset_estimate_restarts_it():
     with World(noise_scale=0.0) as world:  # exact sensing: only the reset separates estimate and truth
         uav = world.add_robot("bebop2", pose=[0.0, 0.0, 1.5, 0.0])
-        port = onboard_of(uav)
+        port = live_view(uav.world, uav.name)
         world.step(0.5)
         # the carrier hands over a pose 2 m off and turned by +90°: odom x is then the true -y
         port.reset_estimate([2.0, 0.0, 1.5], math.pi / 2)
@@ -165,7 +165,8 @@ def test_wheel_speed_is_measured_and_the_odometry_frame_is_odom():
         ugv = world.add_robot("mobile_manipulator", pose=[0.0, 0.0, 0.0])
         ugv.drive(0.8, 0.0)
         world.step(2.0)
-        assert onboard_of(ugv).speed() == pytest.approx(0.8, rel=0.05) and onboard_of(ugv).speed() != ugv.speed()
+        encoders = live_view(ugv.world, ugv.name).speed()
+        assert encoders == pytest.approx(0.8, rel=0.05) and encoders != ugv.speed()
         assert ugv.estimator.estimate().frame == "odom" and ugv.estimator.estimate().source == "wheel_odometry"
         ugv.stop()
         world.step(2.0)
@@ -239,7 +240,7 @@ def test_noise_scale_0_gives_exact_sensors():
 def test_ardrone2_bottom_camera_is_0_1_s_late_and_plain_rgb():
     with World(seed=0) as world:
         uav = world.add_robot("ardrone2", pose=[0.0, 0.0, 2.0, 0.0])
-        port = onboard_of(uav).sensor("bottom_camera")
+        port = live_view(uav.world, uav.name).sensor("bottom_camera")
         ages = []
         for _ in range(60):
             world.step(1.0 / 30.0)
@@ -254,7 +255,7 @@ def test_ardrone2_bottom_camera_is_0_1_s_late_and_plain_rgb():
 def test_the_onboard_lidar_scan_carries_no_pose_and_no_body_ids():
     with World(seed=0) as world:
         mm = world.add_robot("mobile_manipulator")
-        scan = onboard_of(mm).sensor("lidar").read().data
+        scan = live_view(mm.world, mm.name).sensor("lidar").read().data
         assert not hasattr(scan, "position") and not hasattr(scan, "hit_bodies")
         assert scan.ranges.shape == scan.angles.shape == (541,) and scan.max_range == 20.0
 

@@ -13,9 +13,11 @@ import math
 
 import numpy as np
 import pytest
+from live_view import live_view
 from py_trees.common import Status
 from skill_harness import Harness
 
+from marsupial.api.readings import StateEstimate
 from marsupial.geometry import quaternion_from_yaw, yaw_of
 from marsupial.sensing import body_pose, in_nav_frame, sensor_mount
 from marsupial.skills.uav_docking.coverage import (
@@ -31,9 +33,7 @@ from marsupial.skills.uav_docking.explore import Explore
 from marsupial.trees.replay import read_log
 from marsupial.trees.runner import run_mission
 from marsupial.world import World
-from marsupial.world.estimation import StateEstimate
-from marsupial.world.onboard import onboard_of
-from marsupial.world.priors import BuildingPlan
+from marsupial.world.priors import building_plan
 from marsupial.world.team_link import TeamLinkConfig
 
 D_E, D_TEAM = 1.5, 4.5  # m: smaller than the defaults so that a short run meets both constraints many times
@@ -107,7 +107,7 @@ def front_camera(world, uav):
     A camera samples when read and delivers the frame a latency later (or
     drops it): the world is stepped by ticks until one arrives.
     """
-    onboard = onboard_of(uav)
+    onboard = live_view(uav.world, uav.name)
     port = onboard.sensor("front_camera")
     mount = sensor_mount(onboard, "camera_front", port.offset, port.R_link_optical)
     asked = world.now
@@ -122,7 +122,7 @@ def front_camera(world, uav):
 
 
 def flight_map(world):
-    return FlightMap.from_plan(BuildingPlan.of(world.scene), 1.5, 0.5, 0.45, ("room", "hall", "corridor"))
+    return FlightMap.from_plan(building_plan(world.scene), 1.5, 0.5, 0.45, ("room", "hall", "corridor"))
 
 
 def test_walls_of_the_plan_hide_what_is_behind_them_from_the_coverage():

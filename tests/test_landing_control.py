@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
+from marsupial.api.errors import UnknownNameError
 from marsupial.skills.landing.control import HeightAdaptivePI, PIGains, PlatformTracker
 from marsupial.skills.landing.prediction import KalmanParams, PlatformPredictor
-from marsupial.world.errors import UnknownNameError
 
 CAMERA_HZ = 30.0  # AR.Drone 2 bottom camera of the world
 

@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from live_view import live_view
 
 from marsupial.geometry import heading_rotation, rotation_matrix, yaw_of
 from marsupial.skills.landing.touchdown import TouchdownParams, TouchdownTest
@@ -29,9 +30,8 @@ def test_stamped_history_returns_the_value_nearest_a_stamp():
 
 
 def _module(world: World, uav: str = "uav") -> TrackingModule:
-    context = RunContext(world=world)
-    ugv = context.onboard("ugv")
-    return TrackingModule(context.onboard(uav), ugv.platform_size, context)
+    """The tracking module on ``uav``'s view read live from ``world``; set ``module.context.now`` before updates."""
+    return TrackingModule(live_view(world, uav), live_view(world, "ugv").platform_size, RunContext())
 
 
 def test_frames_are_posed_with_the_estimate_and_the_urdf_mount_not_the_true_camera_pose():
@@ -42,6 +42,7 @@ def test_frames_are_posed_with_the_estimate_and_the_urdf_mount_not_the_true_came
         uav = world.add_robot("ardrone2", "uav", pose=pose)
         module = _module(world)
         world.step(0.5)
+        module.context.now = world.now
         module.update()
         camera = module.camera_pose(world.now)
         estimate = module.estimate
@@ -58,6 +59,7 @@ def test_frames_are_posed_with_the_estimate_and_the_urdf_mount_not_the_true_came
         # a located platform: its offset from the UAV in the heading frame, from onboard data
         for _ in range(4):
             world.step(1.0 / 30.0)
+            module.context.now = world.now
             module.update()
         assert module.located >= 1
         expected = heading_rotation(yaw_of(q_true)) @ (p_platform[:2] - p_true[:2])

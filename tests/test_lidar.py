@@ -6,9 +6,10 @@ import numpy as np
 import pybullet
 import pytest
 
+from marsupial.api.model import LidarSpec
 from marsupial.world import World
 from marsupial.world.sensors.base import SensorConfig
-from marsupial.world.sensors.lidar import Lidar, LidarSpec
+from marsupial.world.sensors.lidar import Lidar
 
 WALL_X = 3.0  # m, centre of a 0.2 m thick wall in front of the robot
 LIDAR_X = 0.17  # m, LiDAR ahead of base_footprint (URDF)

@@ -6,9 +6,9 @@ import numpy as np
 import pybullet
 import pytest
 
+from marsupial.api.errors import UnknownNameError
+from marsupial.api.kinematics import ArmKinematics
 from marsupial.world import World
-from marsupial.world.errors import UnknownNameError
-from marsupial.world.kinematics import ArmKinematics
 from marsupial.world.robots.mms import MMS, LaunchingApparatus
 
 

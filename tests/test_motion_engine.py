@@ -14,10 +14,10 @@ converted to M) and the contact-phase target.
 import numpy as np
 import pytest
 
+from marsupial.api.errors import UnknownNameError
+from marsupial.api.kinematics import ArmKinematics
 from marsupial.skills.uav_docking.engine import MotionEngine, MotionEngineParams, ObstacleScan
 from marsupial.world import World
-from marsupial.world.errors import UnknownNameError
-from marsupial.world.kinematics import ArmKinematics
 from marsupial.world.robots.mobile_manipulator import JOINT_SPEED_LIMIT
 
 SPEED = 0.15  # m/s, UAV speed along the line (in M)

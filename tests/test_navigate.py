@@ -11,7 +11,7 @@ from marsupial.trees.replay import read_log
 from marsupial.trees.runner import run_mission
 from marsupial.world import World
 from marsupial.world.contacts import ContactMonitor
-from marsupial.world.priors import BuildingPlan
+from marsupial.world.priors import building_plan
 
 
 def add_box(world, center, half_extents):
@@ -124,7 +124,7 @@ def test_navigate_follows_the_plans_guide_path_through_the_building_on_map_local
     _, truth = log.poses("carrier")
     _, estimate = log.poses("carrier", estimate=True)
     with World(scene="usar_building") as world:
-        plan = BuildingPlan.of(world.scene)
+        plan = building_plan(world.scene)
     end = plan.path("operator_path")[-1]
     assert np.linalg.norm(truth[-1, :2] - end) < 0.6  # the guide path's end in the target room, through door_6
     assert np.linalg.norm(truth[:, :2] - estimate[:, :2], axis=1).max() < 0.3  # map localisation: bounded error

@@ -8,47 +8,24 @@ import pytest
 from py_trees.common import Status
 from py_trees.composites import Selector
 
+from marsupial.api.commands import Drive as Drive_
+from marsupial.api.commands import SafeStop
+from marsupial.api.model import RobotModel
+from marsupial.api.views import RobotState, WheeledView
 from marsupial.trees.arbitration import Arbiter
 from marsupial.trees.composites import GuardedBranch, Priorities
-from marsupial.trees.operator import OperatorChannel, parse_line
+from marsupial.trees.operator import OperatorChannel, OperatorLatch, parse_line
 from marsupial.trees.replay import read_log
 from marsupial.trees.runner import run_mission
 from marsupial.trees.skill import Condition, RunContext, Skill
-from marsupial.world import World
 
 
 # ---------------------------------------------------------------- arbitration
-class StubRobot:
-    """Records the commands it receives; it is its own onboard interface (one resource, its base)."""
-
-    name = "r"
-    commands = {"drive": "base"}
-    _onboard = None  # (onboard_of keeps the interface there)
-
-    @staticmethod
-    def onboard_class(robot):
-        return robot
-
-    def __init__(self):
-        self.received = []
-
-    def resources(self):
-        return frozenset({"base"})
-
-    def devices(self):
-        return frozenset()
-
-    def drive(self, v, omega):
-        self.received.append(("drive", v))
-
-    def safe_stop(self, resource=None):
-        self.received.append(("safe_stop",))
-
-
 class Drive(Skill):
-    """Drives the stub robot at its name's speed every tick."""
+    """Drives robot ``r`` (a wheeled base) at its ``speed`` every tick."""
 
     speed = 0.0
+    claims = ("base",)
 
     def step(self):
         self.robot.drive(self.speed, 0.0)
@@ -72,75 +49,71 @@ class Flag(Condition):
         return Flag.up
 
 
-@pytest.fixture
-def stub_world():
-    with World() as world:
-        world.robots["r"] = StubRobot()
-        yield world
+def stub_context():
+    """A run context with one wheeled robot ``r`` (its view: readings in, commands to the arbiter's outbox)."""
+    return RunContext(robots={"r": RobotState(RobotModel("r", "stub"))}, views={"r": WheeledView})
 
 
 def tick(root, context, n=1):
+    """Tick ``n`` times; the commands sent, in order."""
+    sent = []
     for _ in range(n):
         context.arbiter.new_tick()
         root.tick_once()
+        sent.extend(command for _, command in context.arbiter.take())
+    return sent
 
 
-def test_preempting_command_survives_the_safe_stop_of_the_preempted_skill(stub_world):
-    context = RunContext(world=stub_world)
+def test_preempting_command_survives_the_safe_stop_of_the_preempted_skill():
+    context = stub_context()
     high, low = Drive("high", context=context, robot="r"), Drive("low", context=context, robot="r")
     high.speed, low.speed = 1.0, 0.5
     root = Selector(
         "root", memory=False, children=[GuardedBranch("guarded", [Flag("flag", context=context)], high, context), low]
     )
-    robot = stub_world.robots["r"]
     Flag.up = False
-    tick(root, context, 2)
-    assert robot.received == [("drive", 0.5)] * 2
+    assert tick(root, context, 2) == [Drive_("r", 0.5, 0.0)] * 2
     Flag.up = True
-    tick(root, context)  # tick 3: py_trees initialises and ticks "high" before terminating "low"
-    assert robot.received[2:] == [("drive", 1.0)]  # low's safe-stop was dropped
+    # tick 3: py_trees initialises and ticks "high" before terminating "low": low's safe-stop is dropped
+    assert tick(root, context) == [Drive_("r", 1.0, 0.0)]
     assert low.status == Status.INVALID and low.stopped_by.node_name == "high" and low.stopped_by.tick == 3
     assert context.arbiter.last("r").node_name == "high"
     Flag.up = False
-    tick(root, context)  # tick 4: "high" loses its guard, is stopped first, then "low" starts
-    assert robot.received[3:] == [("safe_stop",), ("drive", 0.5)]
+    # tick 4: "high" loses its guard, is stopped first, then "low" starts
+    assert tick(root, context) == [SafeStop("r", "base"), Drive_("r", 0.5, 0.0)]
     assert high.stopped_by is None
 
 
-def test_safe_stop_applies_when_the_preempting_branch_leaves_the_robot_alone(stub_world):
-    context = RunContext(world=stub_world)
+def test_safe_stop_applies_when_the_preempting_branch_leaves_the_robot_alone():
+    context = stub_context()
     low = Drive("low", context=context, robot="r")
     root = Selector("root", memory=False, children=[
         GuardedBranch("guarded", [Flag("flag", context=context)], Idle("idle", context=context), context), low])
     Flag.up = False
-    tick(root, context)
+    sent = tick(root, context)
     Flag.up = True
-    tick(root, context)
-    assert stub_world.robots["r"].received == [("drive", 0.0), ("safe_stop",)]
+    assert sent + tick(root, context) == [Drive_("r", 0.0, 0.0), SafeStop("r", "base")]
     assert low.stopped_by is None
 
 
-def test_a_safe_stop_in_a_later_tick_is_applied(stub_world):
-    arbiter, robot = Arbiter(), stub_world.robots["r"]
+def test_a_safe_stop_in_a_later_tick_is_applied():
+    arbiter = Arbiter()
     arbiter.new_tick()
-    arbiter.command("r", "base", lambda: robot.drive(1.0, 0.0), "a", "a", "drive")
-    assert arbiter.safe_stop(robot, "b", "b").node_name == "a"  # same tick, other node: dropped
-    assert arbiter.safe_stop(robot, "a", "a") is None  # the commanding node itself may stop it
+    arbiter.command("base", Drive_("r", 1.0, 0.0), "a", "a")
+    assert arbiter.safe_stop(WheeledView, "r", "b", "b").node_name == "a"  # same tick, other node: dropped
+    assert arbiter.safe_stop(WheeledView, "r", "a", "a") is None  # the commanding node itself may stop it
     arbiter.new_tick()
-    arbiter.command("r", "base", lambda: robot.drive(1.0, 0.0), "a", "a", "drive")
+    arbiter.command("base", Drive_("r", 1.0, 0.0), "a", "a")
     arbiter.new_tick()
-    assert arbiter.safe_stop(robot, "b", "b") is None
-    assert robot.received == [("drive", 1.0), ("safe_stop",), ("drive", 1.0), ("safe_stop",)]
+    assert arbiter.safe_stop(WheeledView, "r", "b", "b") is None
+    assert arbiter.take() == (
+        ("a", Drive_("r", 1.0, 0.0)), ("a", SafeStop("r", "base")), ("a", Drive_("r", 1.0, 0.0)),
+        ("b", SafeStop("r", "base")),
+    )
 
 
-def test_priorities_record_who_preempted_whom(stub_world):
-    events = []
-
-    class Sink:
-        def log_event(self, t, kind, **fields):
-            events.append((kind, fields))
-
-    context = RunContext(world=stub_world, recorder=Sink())
+def test_priorities_record_who_preempted_whom():
+    context = stub_context()
     low = Drive("low", context=context, robot="r")
     root = Priorities(
         "p", [GuardedBranch("b", [Flag("flag", context=context)], Idle("idle", context=context), context), low], context
@@ -149,7 +122,7 @@ def test_priorities_record_who_preempted_whom(stub_world):
     tick(root, context)
     Flag.up = True
     tick(root, context)
-    [preemption] = [f for k, f in events if k == "preemption"]
+    [preemption] = [r.fields for r in context.records if r.kind == "event" and r.name == "preemption"]
     assert preemption == {"preempted": "low", "by": "idle", "why": "flag()", "robot": "r", "stop": "safe_stop"}
 
 
@@ -270,16 +243,19 @@ def test_abort_pause_and_resume(tmp_path):
 
 
 # ---------------------------------------------------------------- operator channel
-def test_operator_channel_latches_and_stamps_commands():
-    channel = OperatorChannel([(1.0, "dock", "corridor"), (0.5, "pause", "")])
+def test_operator_channel_stamps_commands_and_the_tree_latches_them():
+    channel, latch = OperatorChannel([(1.0, "dock", "corridor"), (0.5, "pause", "")]), OperatorLatch()
     channel.say("deploy", "now")
     first = channel.poll(0.0)
     assert [(c.say, c.at, c.source) for c in first] == [("deploy", 0.0, "api")]
     assert channel.poll(0.4) == []
-    assert [c.say for c in channel.poll(1.0)] == ["pause", "dock"]  # scripted ones in time order
-    assert channel.latched("pause") is None  # control commands are handled by the runner
-    assert channel.latched("dock").why == "corridor"
-    assert channel.handle("dock").at == 1.0 and channel.latched("dock") is None
+    said = channel.poll(1.0)
+    assert [c.say for c in said] == ["pause", "dock"]  # scripted ones in time order
+    for command in said:
+        latch.latch(command)
+    assert latch.latched("pause") is None  # control commands are handled by the runner
+    assert latch.latched("dock").why == "corridor"
+    assert latch.handle("dock").at == 1.0 and latch.latched("dock") is None
 
 
 def test_operator_commands_from_a_stream():

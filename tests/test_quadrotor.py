@@ -8,12 +8,13 @@ import numpy as np
 import pybullet
 import pytest
 
+from marsupial.api.errors import UnknownNameError, WorldError
+from marsupial.api.model import Intrinsics
+from marsupial.api.tags import load_tag_bundle
 from marsupial.world import World
-from marsupial.world.apriltag_bundle import load_tag_bundle
-from marsupial.world.errors import UnknownNameError, WorldError
 from marsupial.world.robots.base import Robot
 from marsupial.world.sensors.base import SensorConfig
-from marsupial.world.sensors.camera import OPTICAL_UP, Camera, Intrinsics
+from marsupial.world.sensors.camera import OPTICAL_UP, Camera
 
 STEP = 1.0 / 240
 
@@ -314,7 +315,8 @@ def test_tag_bundle_is_detected_unmirrored_from_below(distance, yaw):
         camera = Camera(post, "eye", Intrinsics(640, 480, 60.0), SensorConfig(rate_hz=30.0), R_link_optical=OPTICAL_UP)
         frame = camera.read().data
         gray = cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2GRAY)
-        detector = cv2.aruco.ArucoDetector(bundle.aruco_dictionary(), cv2.aruco.DetectorParameters())
+        dictionary = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, bundle.aruco_dictionary))
+        detector = cv2.aruco.ArucoDetector(dictionary, cv2.aruco.DetectorParameters())
         corners, ids, _ = detector.detectMarkers(gray)
         assert ids is not None and 0 in ids.ravel()
         p_link, q_link = uav.link_pose(bundle.link)

@@ -19,6 +19,7 @@ from mcap.reader import make_reader
 from py_trees.common import Status
 
 import marsupial
+from marsupial.trees.btxml import TreeTracker
 from marsupial.trees.recorder import CHANNEL_SCHEMAS, EVENT_KINDS, SCHEMAS, Recorder
 from marsupial.trees.replay import LogError, read_log
 from marsupial.world import World
@@ -151,7 +152,7 @@ def test_schema_names_and_encodings_match_foxglove(tmp_path):
         rec.log_robot_poses(0.0, {"uav": ([0, 0, 0], [0, 0, 0, 1])}, {"uav": ([0, 0, 0], [0, 0, 0, 1])})
         rec.log_image(0.0, "uav/camera", np.zeros((4, 4, 3), np.uint8))
         rec.log_metric(0.0, "m", 1)
-        rec.log_tree(0.0, py_trees.behaviours.Success("s"))
+        rec.log_tree(0.0, TreeTracker().status(py_trees.behaviours.Success("s")))
     summary, _, _ = read_valid(path)
     topics = {c.topic: summary.schemas[c.schema_id] for c in summary.channels.values()}
     for topic, name in {**CHANNEL_SCHEMAS, **FOXGLOVE_TOPICS}.items():
@@ -178,6 +179,12 @@ def test_schema_names_and_encodings_match_foxglove(tmp_path):
     assert SCHEMAS["marsupial.Event"]["properties"]["kind"]["enum"] == list(EVENT_KINDS)
 
 
+def snap(rec, tracker, t, root):
+    """Log the tree's statuses as a run does: what the tracker reports changed, written by the recorder."""
+    status = tracker.status(root)
+    return status is not None and rec.log_tree(t, status)
+
+
 def test_tree_is_snapshot_only_on_change(tmp_path):
     path = tmp_path / "run.mcap"
     takeoff = py_trees.behaviours.StatusQueue(
@@ -185,14 +192,14 @@ def test_tree_is_snapshot_only_on_change(tmp_path):
     )
     hover = py_trees.behaviours.Running("hover")
     root = py_trees.composites.Sequence("mission", memory=True, children=[takeoff, hover])
-    written = []
+    written, tracker = [], TreeTracker()
     with Recorder(path) as rec:
-        rec.log_tree(0.0, root)  # before the first tick: everything IDLE
+        snap(rec, tracker, 0.0, root)  # before the first tick: everything IDLE
         for tick in range(1, 6):
             root.tick_once()
-            written.append(rec.log_tree(tick * 0.1, root))
+            written.append(snap(rec, tracker, tick * 0.1, root))
         root.stop(Status.INVALID)  # halted: back to IDLE
-        written.append(rec.log_tree(0.6, root))
+        written.append(snap(rec, tracker, 0.6, root))
     assert written == [True, False, True, False, False, True]
     log = read_log(path)
     snaps = log.tree_snapshots
@@ -226,11 +233,12 @@ def test_tree_is_snapshot_only_on_change(tmp_path):
 def test_tree_structure_change_rewrites_xml(tmp_path):
     path = tmp_path / "run.mcap"
     root = py_trees.composites.Sequence("mission", memory=True, children=[py_trees.behaviours.Success("a")])
+    tracker = TreeTracker()
     with Recorder(path) as rec:
         root.tick_once()
-        rec.log_tree(0.0, root)
+        snap(rec, tracker, 0.0, root)
         root.add_child(py_trees.behaviours.Success("b"))
-        assert rec.log_tree(0.1, root)  # same statuses, new structure
+        assert snap(rec, tracker, 0.1, root)  # same statuses, new structure
     log = read_log(path)
     assert [m.t for m in log.messages("/tree/xml")] == [0.0, 0.1]
     assert log.tree_snapshots[1].names == {1: "mission", 2: "a", 3: "b"}

@@ -16,13 +16,13 @@ from click.testing import CliRunner
 from py_trees.common import Status
 from skill_harness import Harness
 
+from marsupial.api.capabilities import Carrier, HasBase, Rotorcraft, provides
+from marsupial.api.views import CarrierView, QuadrotorView
 from marsupial.trees.arbitration import Arbiter, UnclaimedResourceError
 from marsupial.trees.cli import cli
 from marsupial.trees.registry import Registry
 from marsupial.trees.skill import Skill
 from marsupial.world import World
-from marsupial.world.capabilities import Carrier, HasBase, Rotorcraft, provides
-from marsupial.world.onboard import CarrierOnboard, QuadrotorOnboard
 from marsupial.world.robots.attachment import place_link_at
 
 TEAM = """\
@@ -77,10 +77,10 @@ def test_parallel_branches_on_different_resources_of_one_robot_compile(tmp_path)
     assert code == 0, out
 
 
-def test_capabilities_are_the_onboard_interfaces():
-    assert provides(CarrierOnboard, Carrier) and provides(CarrierOnboard, HasBase)
-    assert provides(QuadrotorOnboard, Rotorcraft) and not provides(QuadrotorOnboard, HasBase)
-    assert CarrierOnboard.resources() == {"base", "arm", "docking"}
+def test_capabilities_are_the_robot_views():
+    assert provides(CarrierView, Carrier) and provides(CarrierView, HasBase)
+    assert provides(QuadrotorView, Rotorcraft) and not provides(QuadrotorView, HasBase)
+    assert CarrierView.resources() == {"base", "arm", "docking"}
 
 
 class RecordingArbiter(Arbiter):
@@ -90,11 +90,11 @@ class RecordingArbiter(Arbiter):
         super().__init__()
         self.sent: list[tuple[int, str, str, str, str]] = []
 
-    def command(self, robot, resource, call, node_id, node_name, method, yielding=False):
-        result, kept = super().command(robot, resource, call, node_id, node_name, method, yielding)
+    def command(self, resource, command, node_id, node_name, yielding=False):
+        kept = super().command(resource, command, node_id, node_name, yielding)
         if kept is None:
-            self.sent.append((self.tick, node_name, robot, resource, method))
-        return result, kept
+            self.sent.append((self.tick, node_name, command.robot, resource, type(command).__name__))
+        return kept
 
 
 def take_over(port, resource):
@@ -211,18 +211,19 @@ def test_a_preempting_command_survives_the_finish_of_the_preempted_skill(name):
         harness = Harness(world)
         arbiter = harness.context.arbiter = RecordingArbiter()
         skill = harness.node(cls, robot, **params)
+        host, bridge = harness.host(skill), harness.bridge
         for _ in range(3):  # the skill runs and commands its resources
-            arbiter.new_tick()
-            skill.tick_once()
+            bridge.apply(host.tick(bridge.tick_input()))
             world.step(0.1)
         assert skill.status == Status.RUNNING, skill.feedback_message
         claims = skill.claimed(skill.params, robot)
         resources = sorted({(r, res) for r, res in claims if res != "*"} | {
-            (r, res) for r, res in claims if res == "*" for res in harness.context.onboard(r).resources()
+            (r, res) for r, res in claims if res == "*" for res in harness.context.views[r].resources()
         })
         takeover_cls = type("Takeover", (Skill,), {"claims": tuple(f"{r}/{res}" for r, res in resources)})
         takeover = harness.node(takeover_cls, robot, name="takeover")
-        tick = arbiter.new_tick()
+        harness.feed(skill)
+        tick = arbiter.tick
         for member, resource in resources:
             take_over(takeover.member(member), resource)
         skill.stop(Status.INVALID)  # preempted in the tick the other node took its resources over
@@ -245,5 +246,5 @@ def test_a_command_to_a_resource_not_claimed_is_refused():
         world.add_robot("mobile_manipulator", "carrier")
         world.add_robot("bebop2", "uav", pose=[0, 0, 1, 0])
         harness = Harness(world)
-        with pytest.raises(UnclaimedResourceError, match="commands drive\\(\\) of 'carrier' \\(resource 'base'\\)"):
+        with pytest.raises(UnclaimedResourceError, match="commands Drive of 'carrier' \\(resource 'base'\\)"):
             harness.run(harness.node(Sneaky, robot="uav"), 0.2)

@@ -7,9 +7,9 @@ import numpy as np
 import pybullet
 import pytest
 
+from marsupial.api.errors import UnknownNameError
 from marsupial.world import World, WorldError
 from marsupial.world import scene as scene_module
-from marsupial.world.errors import UnknownNameError
 from marsupial.world.scene import known_scenes
 
 SCENES = ["collapsed_mockup", "marsupial_yard", "open_field", "usar_building"]

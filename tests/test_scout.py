@@ -12,8 +12,10 @@ import math
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from live_view import live_view
 from pydantic import ValidationError
 
+from marsupial.api.views import LinkState, LinkView
 from marsupial.skills.scout.depth import MonocularErrorModel
 from marsupial.skills.scout.detection import HsvColourDetector
 from marsupial.skills.scout.policy import decide, velocity_command
@@ -23,8 +25,7 @@ from marsupial.trees.cli import cli
 from marsupial.trees.replay import read_log
 from marsupial.trees.runner import run_mission
 from marsupial.world import World
-from marsupial.world.onboard import onboard_of
-from marsupial.world.team_link import LinkPort, TeamLinkConfig
+from marsupial.world.team_link import TeamLinkConfig
 
 START = [0.3, 0.4, 0.85, math.pi / 2]  # past the amoeba aperture, facing the corridor (+y)
 EXTINGUISHER = np.array([5.8, 6.45])  # collapsed_mockup.yaml
@@ -142,12 +143,14 @@ def test_the_relay_delivers_decoded_frames_late_and_counts_the_lost_ones():
     with World(scene="collapsed_mockup", seed=5, team_link=link) as world:
         world.add_robot("mms", "mms", pose=[0.3, -2.4, 1.5708], mavs=False)
         world.add_robot("tello", "scout", pose=START)
-        camera = onboard_of(world.robot("scout")).sensor("front_camera")
-        sender = VideoSender(LinkPort(world.team_link, "scout"), quality=80, with_depth=True)
-        receiver = VideoReceiver(LinkPort(world.team_link, "mms"), "scout")
+        scout = live_view(world, "scout")
+        camera, delivered = scout.sensor("front_camera"), LinkState()
+        sender = VideoSender(LinkView("scout", delivered, scout._sink), quality=80, with_depth=True)
+        receiver = VideoReceiver(LinkView("mms", delivered, scout._sink), "scout")
         originals, frames = {}, []
         for _ in range(40):
             world.step(0.1)
+            delivered.update(world.team_link.take_delivered())
             reading = camera.read()
             image = reading.data if reading is not None else None
             if image is not None and sender.offer(reading.stamp, image.rgb, image.K, image.depth):

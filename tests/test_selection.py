@@ -13,6 +13,7 @@ import math
 import numpy as np
 import pytest
 
+from marsupial.api.kinematics import ArmKinematics
 from marsupial.skills.uav_docking.graph import Graph
 from marsupial.skills.uav_docking.ik_engine import IKEngine
 from marsupial.skills.uav_docking.selection import (
@@ -27,7 +28,6 @@ from marsupial.skills.uav_docking.selection import (
     select,
     tracking_state,
 )
-from marsupial.world.kinematics import ArmKinematics
 
 Q_READY = np.array([0.0, -0.87, 1.98, 0.0, -1.11, 0.0])
 

@@ -1,55 +1,54 @@
-"""The sensing boundary holds: skills and conditions decide only from what the robots sense.
+"""The sensing boundary holds by construction: nothing a node holds leads to the simulator or the referee.
 
-Two checks (``docs/world.md``, "Sensing boundary"):
+Two checks (``docs/sensing.md``):
 
 - static: no module under ``skills/`` (nor the built-in conditions) imports
-  pybullet or the world's bodies, scenes and contacts, or names an
-  attribute that leads to the world or a body (``.world``, ``.body_id``,
-  ``.client_id``, a robot's ``pose()``/``velocity()``/``link_pose()``);
-- at run time: every shipped mission runs for a while with the truth trap
-  (:mod:`tests.truth_trap`) installed, and no truth accessor may be reached
-  from decision code.
+  pybullet, the simulator or the runtime's world side, names an attribute
+  that leads to a body, or uses the introspection that would dig past
+  private names (``gc``, ``inspect``, ``sys._getframe``, ``vars()``,
+  ``__dict__``, ``getattr``/``setattr`` of a private name);
+- at run time: every shipped mission (and a small mission for every node no
+  shipped mission uses) runs to its end while the object graph reachable
+  from each of its nodes is walked (:mod:`tests.reachability`) at the node's
+  first tick and every :data:`WALK_EVERY` ticks after; the first simulator
+  object, world-side runtime object or referee score board reached fails the
+  test with its path. Each mission's nodes must all have been ticked, so
+  every registered node is ticked at least once in the suite.
 """
 
 from __future__ import annotations
 
 import ast
+from collections.abc import Iterator
 from pathlib import Path
 
 import py_trees
 import pytest
-from truth_trap import truth_trap
+from reachability import first_forbidden
 
 import marsupial.missions
 import marsupial.skills
 import marsupial.trees
+from marsupial.trees.compiler import compile_mission
+from marsupial.trees.host import TreeHost
+from marsupial.trees.mission import load_mission
+from marsupial.trees.registry import Registry
 from marsupial.trees.runner import run_mission
 
 SKILLS_DIR = Path(marsupial.skills.__file__).resolve().parent
 CONDITIONS = Path(marsupial.trees.__file__).resolve().parent / "conditions.py"
 DECISION_CODE = sorted(SKILLS_DIR.rglob("*.py")) + [CONDITIONS]
 MISSIONS_DIR = Path(marsupial.missions.__file__).resolve().parent
+COVERAGE_DIR = Path(__file__).parent / "data" / "coverage_missions"
 
 FORBIDDEN_MODULES = (
-    "pybullet",
-    "pybullet_utils",
-    "marsupial.world.world",
-    "marsupial.world.robots",
-    "marsupial.world.scene",
-    "marsupial.world.contacts",
-    "marsupial.world.scoring",
-    "marsupial.world.disturbances",
-    "marsupial.world.estimation",
+    "pybullet", "pybullet_utils", "gc", "inspect", "marsupial.world", "marsupial.trees.bridge",
+    "marsupial.trees.runner", "marsupial.trees.isolation", "marsupial.trees.host", "marsupial.trees.recorder",
 )
-FORBIDDEN_ATTRIBUTES = frozenset({"world", "body_id", "client_id", "cid", "_robot", "bullet"})
-#: private names of the onboard ports' classes: their internals hold the truth the ports filter
-PRIVATE_PORT_PREFIXES = ("_Onboard", "_SensorPort", "_RunContext", "_DockingPort", "_LinkPort")
-TRUTH_CALLS = frozenset({"pose", "velocity", "link_pose", "mounted_frame", "optical_pose", "platform_pose",
-                         "acceleration", "distance_to", "offset_to", "in_contact", "part_a_pose", "part_b_pose"})
-#: how long each shipped mission runs under the trap (s, simulated): long enough to reach its first skills
-#: of every family (usar_docking's first operator docking is requested at 95 s)
-TRAP_RUN_S = {"usar_docking": 140.0, "aperture_scouts": 180.0}
-DEFAULT_TRAP_RUN_S = 25.0
+FORBIDDEN_ATTRIBUTES = frozenset({"world", "body_id", "client_id", "cid", "bullet", "__dict__", "_getframe"})
+INTROSPECTION_CALLS = frozenset({"vars", "globals", "locals"})
+#: ticks between two walks of a node's graph after its first tick
+WALK_EVERY = 200
 
 
 def _module_of(node: ast.ImportFrom, path: Path) -> str:
@@ -64,38 +63,42 @@ def _module_of(node: ast.ImportFrom, path: Path) -> str:
     return ".".join(base + ([node.module] if node.module else []))
 
 
-def _model_fact(name: str) -> bool:
-    """An importable fact of a robot's model.
+def _imports(node: ast.AST, path: Path) -> list[str]:
+    if isinstance(node, ast.Import):
+        return [alias.name for alias in node.names]
+    if isinstance(node, ast.ImportFrom):
+        base = _module_of(node, path)
+        return [base] + [f"{base}.{alias.name}" for alias in node.names]
+    return []
 
-    An UPPER_CASE constant or a ``…Limits``/``…Spec``/``…Gains``/``…Mount`` type.
-    """
-    return name.isupper() or name.endswith(("Limits", "Spec", "Gains", "Mount"))
+
+def _private_access(node: ast.Call) -> bool:
+    """``getattr(x, "_name")`` / ``setattr(x, "_name", v)``: reaching a private attribute by its name."""
+    return (
+        isinstance(node.func, ast.Name) and node.func.id in ("getattr", "setattr", "delattr", "hasattr")
+        and len(node.args) >= 2 and isinstance(node.args[1], ast.Constant)
+        and isinstance(node.args[1].value, str) and node.args[1].value.startswith("_")
+    )
+
+
+def _findings(node: ast.AST, path: Path) -> Iterator[str]:
+    for module in _imports(node, path):
+        if any(module == bad or module.startswith(bad + ".") for bad in FORBIDDEN_MODULES):
+            yield f"{path.name}:{node.lineno}: imports {module}"  # type: ignore[attr-defined]
+            break
+    if isinstance(node, ast.Attribute) and node.attr in FORBIDDEN_ATTRIBUTES:
+        yield f"{path.name}:{node.lineno}: uses .{node.attr}"
+    if isinstance(node, ast.Call):
+        if isinstance(node.func, ast.Name) and node.func.id in INTROSPECTION_CALLS:
+            yield f"{path.name}:{node.lineno}: calls {node.func.id}()"
+        if _private_access(node):
+            yield f"{path.name}:{node.lineno}: reaches a private attribute by name"
 
 
 def boundary_findings(path: Path) -> list[str]:
     """Where the decision-code module at ``path`` reaches past the sensing boundary (``file:line: what``)."""
     tree = ast.parse(path.read_text(), str(path))
-    found = []
-    for node in ast.walk(tree):
-        modules: list[str] = []
-        if isinstance(node, ast.Import):
-            modules = [alias.name for alias in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            base = _module_of(node, path)
-            if base.startswith("marsupial.world.robots") and all(_model_fact(alias.name) for alias in node.names):
-                continue  # datasheet constants and spec types of the robots' models (no body, no world)
-            modules = [base] + [f"{base}.{alias.name}" for alias in node.names]
-        for module in modules:
-            if any(module == bad or module.startswith(bad + ".") for bad in FORBIDDEN_MODULES):
-                found.append(f"{path.name}:{node.lineno}: imports {module}")
-                break
-        if isinstance(node, ast.Attribute) and (
-            node.attr in FORBIDDEN_ATTRIBUTES or node.attr.startswith(PRIVATE_PORT_PREFIXES)
-        ):
-            found.append(f"{path.name}:{node.lineno}: uses .{node.attr}")
-        if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr in TRUTH_CALLS:
-            found.append(f"{path.name}:{node.lineno}: calls .{node.func.attr}()")
-    return found
+    return [finding for node in ast.walk(tree) for finding in _findings(node, path)]
 
 
 @pytest.mark.parametrize("path", DECISION_CODE, ids=lambda p: str(p.relative_to(p.parents[1])))
@@ -105,45 +108,102 @@ def test_decision_code_does_not_reach_the_world(path: Path) -> None:
 
 def test_the_static_check_finds_a_skill_reaching_the_world() -> None:
     bad = SKILLS_DIR / "_boundary_probe.py"
-    bad.write_text("import pybullet\n\ndef f(self):\n    return self.world.robot('uav').pose()\n")
+    bad.write_text(
+        "import gc\nimport pybullet\n\ndef f(self):\n    getattr(self.robot, '_state')\n"
+        "    return self.world.robot('uav').__dict__, vars(self)\n"
+    )
     try:
         found = boundary_findings(bad)
     finally:
         bad.unlink()
     assert sorted(found) == [
-        "_boundary_probe.py:1: imports pybullet",
-        "_boundary_probe.py:4: calls .pose()",
-        "_boundary_probe.py:4: uses .world",
+        "_boundary_probe.py:1: imports gc",
+        "_boundary_probe.py:2: imports pybullet",
+        "_boundary_probe.py:5: reaches a private attribute by name",
+        "_boundary_probe.py:6: calls vars()",
+        "_boundary_probe.py:6: uses .__dict__",
+        "_boundary_probe.py:6: uses .world",
     ]
 
 
-SHIPPED = sorted(p.stem for p in MISSIONS_DIR.glob("*.yaml"))
+# ----------------------------------------------------------------- reachability
+SHIPPED = sorted(MISSIONS_DIR.glob("*.yaml"))
+COVERAGE = sorted(COVERAGE_DIR.glob("*.yaml"))
 
 
-@pytest.mark.parametrize("mission", SHIPPED)
-def test_shipped_mission_decides_without_truth(mission: str) -> None:
+def _kinds(path: Path) -> set[str]:
+    """The registered node kinds a mission's tree uses (its subtrees inlined)."""
     py_trees.blackboard.Blackboard.clear()
-    with truth_trap() as trap:
-        result = run_mission(mission, until=TRAP_RUN_S.get(mission, DEFAULT_TRAP_RUN_S), progress=False)
+    return {node.kind for node in compile_mission(load_mission(path)).nodes}
+
+
+class _Walker:
+    """Walks each node's reachable graph after its first tick and every :data:`WALK_EVERY` ticks; kinds ticked."""
+
+    def __init__(self) -> None:
+        self.ticked: set[str] = set()
+        self.hits: list[str] = []
+        self._walked: dict[int, int] = {}
+
+    def after_tick(self, host: TreeHost) -> None:
+        tick = host.context.arbiter.tick
+        for node in host.nodes:
+            if node.ticked != tick:
+                continue
+            self.ticked.add(node.kind)
+            last = self._walked.get(id(node))
+            if last is None or tick - last >= WALK_EVERY:
+                self._walked[id(node)] = tick
+                hit = first_forbidden(node, f"{node.kind} '{node.name}'")
+                if hit is not None:
+                    self.hits.append(hit)
+
+
+@pytest.fixture
+def walker(monkeypatch: pytest.MonkeyPatch) -> _Walker:
+    """Every tree host of the test ticks with the walker watching."""
+    watching = _Walker()
+    tick = TreeHost.tick
+
+    def walked_tick(self: TreeHost, message):  # type: ignore[no-untyped-def]
+        output = tick(self, message)
+        watching.after_tick(self)
+        return output
+
+    monkeypatch.setattr(TreeHost, "tick", walked_tick)
+    return watching
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("path", SHIPPED + COVERAGE, ids=lambda p: p.stem)
+def test_no_node_can_reach_the_simulator_or_the_referee(path: Path, walker: _Walker) -> None:
+    py_trees.blackboard.Blackboard.clear()
+    result = run_mission(path, progress=False)
     assert result.outcome in ("success", "time_limit"), result.message
-    assert trap.violations == [], trap.violations[0]
+    assert walker.hits == [], walker.hits[0]
+    assert _kinds(path) <= walker.ticked, f"never ticked: {sorted(_kinds(path) - walker.ticked)}"
 
 
-def test_the_trap_catches_a_truth_read_from_a_skill() -> None:
-    from skill_harness import Harness
+def test_every_registered_node_is_ticked_by_some_mission_of_the_suite(capsys: pytest.CaptureFixture[str]) -> None:
+    registry = Registry({})
+    registered = set(registry.names("skill")) | set(registry.names("condition"))
+    used = {path.stem: _kinds(path) for path in SHIPPED + COVERAGE}
+    with capsys.disabled():
+        print("\nnodes ticked, by mission:")
+        for name, kinds in sorted(used.items()):
+            print(f"  {name}: {', '.join(sorted(kinds))}")
+    assert registered <= set().union(*used.values()), sorted(registered - set().union(*used.values()))
 
+
+def test_the_walk_finds_a_world_object_held_by_a_node() -> None:
     from marsupial.trees.skill import Skill
     from marsupial.world import World
 
-    class Cheat(Skill):
-        """Reads the body's true pose through the interface's private slot (what the trap must catch)."""
+    class Hoarder(Skill):
+        """Keeps a world handle in a closure (what the walk must find)."""
 
-        def step(self):
-            self.robot._onboard._Onboard__robot.pose()
-            return py_trees.common.Status.SUCCESS
-
-    with World(seed=1) as world, truth_trap() as trap:
-        world.add_robot("bebop2", "uav", pose=[0, 0, 1, 0])
-        harness = Harness(world)
-        harness.run(harness.node(Cheat, robot="uav"), 0.2)
-    assert trap.violations and "Robot.pose" in trap.violations[0]
+    with World(seed=1) as world:
+        node = Hoarder("hoarder")
+        node.later = [lambda: world]  # type: ignore[attr-defined]
+        hit = first_forbidden(node, "hoarder")
+    assert hit is not None and hit.startswith("hoarder.later[0].<closure world> is a marsupial.world.world.World")

@@ -22,9 +22,9 @@ from marsupial.skills.ugv_docking.criterion import (
 )
 from marsupial.skills.ugv_docking.features import T_N, BenchmarkFeatures, extract_features
 from marsupial.skills.ugv_docking.geometry import border_point_image, entry_angle, ground_point, theoretical_slope
+from marsupial.tools.ugv_criterion import record_criterion_list
 from marsupial.world import World
 from marsupial.world.robots.ugv_docking import entry_geometry, place_child
-from marsupial.world.ugv_criterion import record_criterion_list
 
 THETA = math.radians(15.0)  # camera tilt θ, Table 1
 H = 0.23  # H_GS above the camera h (m), Table 1

@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pytest
 
+from marsupial.api.kinematics import ArmKinematics
 from marsupial.skills.uav_docking.cord import Cord, CordParams, build_cord
 from marsupial.skills.uav_docking.ik_engine import IKEngine
 from marsupial.skills.uav_docking.vicinity import (
@@ -21,7 +22,6 @@ from marsupial.skills.uav_docking.vicinity import (
     validate_vicinity,
 )
 from marsupial.skills.uav_docking.zones import ZoneMap, ZoneParams, carrier_zones, repair_cord, thickening
-from marsupial.world.kinematics import ArmKinematics
 
 CORD = CordParams()
 VICINITY = VicinityParams()

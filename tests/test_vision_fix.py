@@ -7,8 +7,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from marsupial.api.readings import VisionFix, vision_fix_topic
 from marsupial.world import World
-from marsupial.world.estimation.external import VisionFix, VisionFixFusion, VisionFixGains, vision_fix_topic
+from marsupial.world.estimation.external import VisionFixFusion, VisionFixGains
 from marsupial.world.team_link import TeamLinkConfig
 
 
@@ -102,9 +103,9 @@ def test_flow_outliers_are_gated_only_while_fixes_are_recent():
 
 
 def test_relative_pose_propagates_without_the_jumps_of_the_uavs_frame_corrections():
+    from marsupial.api.readings import StateEstimate
     from marsupial.geometry import quaternion_from_yaw
     from marsupial.skills.uav_docking.relative_pose import unshifted
-    from marsupial.world.estimation import StateEstimate
 
     shift0 = (0.1, 0.0, -0.05, 0.02)
     moved = StateEstimate(

@@ -6,10 +6,10 @@ import numpy as np
 import pybullet
 import pytest
 
+from marsupial.api.errors import UnknownNameError
+from marsupial.api.model import DiffDriveLimits, Intrinsics
 from marsupial.world import World
-from marsupial.world.errors import UnknownNameError
-from marsupial.world.robots.diff_drive import DiffDrive, DiffDriveLimits
-from marsupial.world.sensors.camera import Intrinsics
+from marsupial.world.robots.diff_drive import DiffDrive
 
 
 def test_clock_counts_whole_physics_steps():
@@ -89,7 +89,7 @@ def test_diff_drive_is_stopped_by_a_wall():
 
 
 def test_missing_asset_names_the_known_ones():
-    from marsupial.world.assets import asset_path
+    from marsupial.api.assets import asset_path
 
     with pytest.raises(
         UnknownNameError, match=r"unknown asset 'bebop3.urdf'\. Did you mean 'bebop2.urdf'\?.*summit_xl.urdf"

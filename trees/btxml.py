@@ -58,6 +58,8 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import ParallelPolicy, Status
 
+from marsupial.api.ticks import TreeStatus
+
 __all__ = ["BTCPP_BUILTINS", "STATUS_NAMES", "root_of", "status_name", "to_btcpp_xml", "walk"]
 
 #: py_trees status -> BehaviorTree.CPP status name (a node never ticked, or halted, is IDLE)
@@ -281,3 +283,24 @@ def to_btcpp_xml(
     root_el.append(model)
     ET.indent(root_el, space="  ")
     return ET.tostring(root_el, encoding="unicode") + "\n"
+
+
+class TreeTracker:
+    """Follows a tree's statuses from tick to tick, for the log (:class:`~marsupial.api.ticks.TreeStatus`)."""
+
+    def __init__(self) -> None:
+        self._walked: list[Behaviour] = []
+        self._statuses: tuple[str, ...] = ()
+
+    def status(self, tree: Behaviour | py_trees.trees.BehaviourTree) -> TreeStatus | None:
+        """The nodes' statuses if they changed since the last call (with names and XML when the structure did)."""
+        nodes = walk(tree)
+        statuses = tuple(STATUS_NAMES[node.status] for node in nodes)
+        fresh = nodes != self._walked  # list equality compares nodes by identity
+        if not fresh and statuses == self._statuses:
+            return None
+        self._statuses = statuses
+        if not fresh:
+            return TreeStatus(statuses)
+        self._walked = nodes
+        return TreeStatus(statuses, tuple(node.name for node in nodes), to_btcpp_xml(nodes[0], with_uids=True))

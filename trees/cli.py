@@ -36,7 +36,7 @@ _err = Console(stderr=True)
 @contextlib.contextmanager
 def bad_input() -> Iterator[None]:
     """Print mission/world/log errors as one message on stderr and exit with code 2."""
-    from marsupial.world.errors import WorldError
+    from marsupial.api.errors import WorldError
 
     from .replay import LogError
 
@@ -127,6 +127,14 @@ def cli() -> None:
     "--operator", is_flag=True, help="Read operator commands from stdin ('command [reason]' per line); real-time pace."
 )
 @click.option("--record-images", is_flag=True, help="Record camera frames that skills log.")
+@click.option(
+    "--record-inputs", is_flag=True,
+    help="Log every message the skills receive (images compressed) for 'marsupial replay LOG --against MISSION'.",
+)
+@click.option(
+    "--isolate", is_flag=True,
+    help="Run the tree and its skills in a process of their own, exchanging messages with the world in lockstep.",
+)
 @click.option("--quiet", "-q", is_flag=True, help="No progress line and no summary table.")
 @click.option("--live", is_flag=True, help="Serve the run to Foxglove over WebSocket while it runs (real-time pace).")
 @click.option("--host", help="Address the live server binds to (default: 127.0.0.1, this machine only).")
@@ -149,6 +157,8 @@ def run(
     sets: tuple[str, ...],
     operator: bool,
     record_images: bool,
+    record_inputs: bool,
+    isolate: bool,
     quiet: bool,
     live: bool,
     host: str | None,
@@ -187,6 +197,8 @@ def run(
                 record_images=record_images,
                 pace=speed if speed is not None else 1.0 if live else None,
                 sinks=sinks,
+                isolate=isolate,
+                record_inputs=record_inputs,
             )
     except KeyboardInterrupt:  # before the run loop took over the signal
         sys.exit(130)
@@ -346,10 +358,24 @@ def schema() -> None:
 
 @cli.command()
 @click.argument("log", type=click.Path(dir_okay=False))
-def replay(log: str) -> None:
-    """Print the timeline of a run log."""
+@click.option(
+    "--against", metavar="MISSION_OR_YAML",
+    help="Feed the log's recorded inputs (run --record-inputs) to this mission's skills and compare their commands.",
+)
+@_set_option
+def replay(log: str, against: str | None, sets: tuple[str, ...]) -> None:
+    """Print the timeline of a run log, or replay its recorded inputs into a mission's skills (--against).
+
+    With --against: exit 0 when every command matches the logged one, exit 1
+    at the first that differs (its tick, node and both commands are printed).
+    """
     from .replay import format_timeline, read_log
 
+    if against is not None:
+        _replay_against(log, against, sets)
+        return
+    if sets:
+        raise click.UsageError("--set changes the mission of --against: add --against MISSION")
     with bad_input():
         run_log = read_log(log)
         marsupial_metadata(run_log, log)
@@ -359,6 +385,19 @@ def replay(log: str) -> None:
         f"sim_time={run_log.sim_time}"
     )
     click.echo(format_timeline(run_log), nl=False)
+
+
+def _replay_against(log: str, mission: str, sets: tuple[str, ...]) -> None:
+    """``marsupial replay LOG --against MISSION``: exit 0 identical, 1 diverged (printed)."""
+    from .against import replay_against
+
+    with bad_input():
+        result = replay_against(log, mission, _assignments(sets, "--set"))
+    if result.divergence is None:
+        click.echo(f"identical: {result.ticks} ticks, {result.commands} commands as logged")
+        return
+    click.echo(f"diverged at {result.divergence}")
+    sys.exit(1)
 
 
 @cli.command()

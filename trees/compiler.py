@@ -43,7 +43,7 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import ParallelPolicy
 from pydantic import TypeAdapter, ValidationError
 
-from marsupial.world.errors import UnknownNameError
+from marsupial.api.errors import UnknownNameError
 
 from .composites import GuardedBranch, Priorities, SimTimeout
 from .conditions import OperatorSaid
@@ -317,12 +317,13 @@ class _Compiler:
                 f"{kind} '{type_name}' cannot run on '{robot}' (a {robot_kind})",
                 expected=f"a robot with capability {needs} ({one_of(able) if able else 'none in this team'})",
             )
-        missing = self.resources.missing_sensors(robot_kind, cls.sensors)
+        own = [s for s in cls.sensors if "/" not in s and "{" not in s]  # fixed names on its own robot
+        missing = self.resources.missing_sensors(robot_kind, own)
         if missing:
             raise self.mission.error_at(
                 at + ("robot",),
                 f"{kind} '{type_name}' reads sensor '{missing[0]}', which '{robot}' (a {robot_kind}) does not have",
-                expected="a robot with the sensors " + ", ".join(cls.sensors),
+                expected="a robot with the sensors " + ", ".join(own),
             )
         return robot
 

@@ -8,7 +8,7 @@ value of the condition key is its ``primary`` parameter:
 ``{difficult_area: 1.0, robot: carrier}``, ``{timer: 120}``.
 
 They decide from what the robots sense (the sensing boundary,
-:mod:`marsupial.world.onboard`): the battery monitor, the LiDAR scan, the
+:mod:`marsupial.api.views`): the battery monitor, the LiDAR scan, the
 robot's estimated position against the zones the mission declares
 (:meth:`~marsupial.trees.skill.RunContext.prior`), the blackboard and the
 simulated time.
@@ -21,8 +21,8 @@ from typing import ClassVar
 import numpy as np
 from pydantic import Field
 
+from marsupial.api.capabilities import HasBase, HasBattery, HasLidar
 from marsupial.sensing import scan_in_body, sensor_mount
-from marsupial.world.capabilities import HasBase, HasBattery, HasLidar
 
 from .skill import Condition, NodeParams
 
@@ -40,7 +40,8 @@ class BatteryBelow(Condition["BatteryBelow.Params"]):
         """State of charge (fraction 0..1) below which the condition holds."""
 
     primary: ClassVar[str] = "threshold"
-    robot_kinds: ClassVar[tuple[type, ...]] = (HasBattery,)  # the robots with a battery monitor (world/energy.py)
+    robot_kinds: ClassVar[tuple[type, ...]] = (HasBattery,)
+    sensors: ClassVar[tuple[str, ...]] = ("battery",)  # the robots with a battery monitor (world/energy.py)
 
     def check(self) -> bool:
         status = self.robot.battery()
@@ -102,6 +103,7 @@ class ObstacleAhead(Condition["ObstacleAhead.Params"]):
 
     primary: ClassVar[str] = "distance"
     robot_kinds: ClassVar[tuple[type, ...]] = (HasBase, HasLidar)  # the wheeled robots with a planar LiDAR
+    sensors: ClassVar[tuple[str, ...]] = ("{sensor}",)
 
     def check(self) -> bool:
         p = self.params

@@ -32,21 +32,12 @@ from __future__ import annotations
 import queue
 import threading
 from collections.abc import Iterable
-from dataclasses import dataclass
 from typing import Any, TextIO
+
+from marsupial.api.ticks import OperatorCommand
 
 #: commands the runner handles above the tree
 CONTROL_COMMANDS = ("abort", "pause", "resume")
-
-
-@dataclass(frozen=True)
-class OperatorCommand:
-    """One operator command as consumed: its name, reason, sim time (s) and source."""
-
-    say: str
-    why: str
-    at: float
-    source: str  # "script", "stdin" or "api"
 
 
 def parse_line(line: str) -> tuple[str, str] | None:
@@ -58,7 +49,7 @@ def parse_line(line: str) -> tuple[str, str] | None:
 
 
 class OperatorChannel:
-    """Queue of operator commands, latched state of mission-defined commands, and history.
+    """Queue of operator commands (scripted, typed in, sent by the API) and their history.
 
     Args:
         script: ``(at, say, why)`` triples of the mission's timeline (sim
@@ -71,7 +62,6 @@ class OperatorChannel:
         self._script = sorted(entries, key=lambda e: e[0])
         self._next_scripted = 0
         self._queue: queue.SimpleQueue[tuple[str, str, str]] = queue.SimpleQueue()
-        self._latched: dict[str, OperatorCommand] = {}
         self.history: list[OperatorCommand] = []
         self._reader: threading.Thread | None = None
 
@@ -97,8 +87,8 @@ class OperatorChannel:
     def poll(self, now: float) -> list[OperatorCommand]:
         """Consume the commands due at sim time ``now``: scripted ones first, then queued ones.
 
-        Mission-defined commands are latched; control commands are only
-        returned (and kept in :attr:`history`) for the runner to handle.
+        They are kept in :attr:`history`; the runner handles the control
+        commands and passes the others to the tree (:class:`OperatorLatch`).
         """
         due: list[tuple[str, str, str]] = []
         while self._next_scripted < len(self._script) and self._script[self._next_scripted][0] <= now + 1e-9:
@@ -111,11 +101,20 @@ class OperatorChannel:
             except queue.Empty:
                 break
         consumed = [OperatorCommand(say, why, now, source) for say, why, source in due]
-        for command in consumed:
-            self.history.append(command)
-            if command.say not in CONTROL_COMMANDS:
-                self._latched[command.say] = command
+        self.history.extend(consumed)
         return consumed
+
+
+class OperatorLatch:
+    """The operator's pending commands as the tree sees them: latched when said, until a node handles them."""
+
+    def __init__(self) -> None:
+        self._latched: dict[str, OperatorCommand] = {}
+
+    def latch(self, command: OperatorCommand) -> None:
+        """Hold ``command`` until it is handled (a control command is the runner's and is not latched)."""
+        if command.say not in CONTROL_COMMANDS:
+            self._latched[command.say] = command
 
     def latched(self, name: str) -> OperatorCommand | None:
         """The pending (said, not yet handled) command ``name``, or ``None``."""

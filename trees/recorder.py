@@ -63,12 +63,11 @@ from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING, Any
 
-import py_trees
-
 import marsupial
 
-from .btxml import STATUS_NAMES, to_btcpp_xml, walk
 from .errors import suggest
+from .exchange_log import SCHEMA as EXCHANGE_SCHEMA
+from .exchange_log import TOPIC as EXCHANGE_TOPIC
 from .messages import (
     WORLD_FRAME,
     encode,
@@ -82,6 +81,7 @@ from .messages import (
 from .sinks import McapSink, Sink
 
 if TYPE_CHECKING:
+    from marsupial.api.ticks import TreeStatus
     from marsupial.world.world import World
 
 __all__ = [
@@ -164,11 +164,11 @@ def _metadata_text(value: Any) -> str:
 
 
 class _TreeTrack:
-    """The tree the recorder follows: which nodes, and their statuses at the last snapshot."""
+    """The tree the recorder follows: its nodes' names in uid order, and their statuses at the last snapshot."""
 
-    def __init__(self, nodes: list[py_trees.behaviour.Behaviour]):
-        self.nodes = nodes  # every node in uid order: another list (by identity) is another structure
-        self.statuses = [py_trees.common.Status.INVALID] * len(nodes)
+    def __init__(self, names: tuple[str, ...]):
+        self.names = names
+        self.statuses: tuple[str, ...] = ("IDLE",) * len(names)
 
 
 # ---------------------------------------------------------------- recorder
@@ -420,6 +420,12 @@ class Recorder:
             payload = {"name": name, "value": float(value), "labels": {k: str(v) for k, v in labels.items()}}
             self._write("/metrics", "marsupial.Metric", ns, payload)
 
+    def log_exchange(self, t: float, kind: str, tick: int, data: str) -> None:
+        """One message of the tick exchange on ``/replay`` (``--record-inputs``; :mod:`.exchange_log`)."""
+        ns = self._time(t, "replay record")
+        if ns is not None:
+            self._write(EXCHANGE_TOPIC, EXCHANGE_SCHEMA, ns, {"kind": kind, "tick": tick, "data": data})
+
     def log_text(self, t: float, level: str | int, message: str, name: str = "marsupial") -> None:
         """A free text line on ``/log`` (foxglove.Log); ``level`` is debug/info/warning/error/fatal or its number."""
         if isinstance(level, str):
@@ -486,45 +492,47 @@ class Recorder:
                 },
             )
 
-    def log_tree(self, t: float, tree: py_trees.behaviour.Behaviour | py_trees.trees.BehaviourTree) -> bool:
+    def log_tree(self, t: float, tree: TreeStatus) -> bool:
         """Snapshot the tree's statuses on ``/tree`` if any changed since the last call (call after each tick).
 
-        The first call, and any call after the tree's structure changed, also
-        writes the tree as BehaviorTree.CPP XML on ``/tree/xml``. Each ``/tree``
-        message lists the nodes whose status changed (``event_log``, in uid
-        order), statuses as IDLE/RUNNING/SUCCESS/FAILURE; halted and preempted
-        nodes show up as going to IDLE. Returns whether a snapshot was written.
+        ``tree`` comes from the tree side (:class:`~marsupial.api.ticks.TreeStatus`).
+        The first call, and any call after the tree's structure changed
+        (``tree.xml`` given), also writes the tree as BehaviorTree.CPP XML on
+        ``/tree/xml``. Each ``/tree`` message lists the nodes whose status
+        changed (``event_log``, in uid order), statuses as
+        IDLE/RUNNING/SUCCESS/FAILURE; halted and preempted nodes show up as
+        going to IDLE. Returns whether a snapshot was written.
         """
         if self._closed:
             return False
-        nodes = walk(tree)
         track = self._tree
-        fresh = track is None or track.nodes != nodes  # list equality compares nodes by identity
+        fresh = tree.xml is not None or track is None
         if fresh:
-            track = _TreeTrack(nodes)
+            track = _TreeTrack(tree.names or tuple(f"node_{i}" for i in range(1, len(tree.statuses) + 1)))
         assert track is not None
-        statuses = [node.status for node in nodes]
-        if not fresh and statuses == track.statuses:
+        if not fresh and tree.statuses == track.statuses:
             return False
         ns = self._time(t, "tree snapshot")
         if ns is None:
             return False
         if fresh:
             self._tree = track
-            self._write("/tree/xml", "std_msgs/msg/String", ns, {"data": to_btcpp_xml(nodes[0], with_uids=True)})
+            if tree.xml is not None:
+                self._write("/tree/xml", "std_msgs/msg/String", ns, {"data": tree.xml})
         stamp = foxglove_time(ns)
         changes = [
             {
                 "timestamp": stamp,
-                "node_name": node.name,
+                "node_name": name,
                 "uid": uid,
-                "previous_status": STATUS_NAMES[before],
-                "current_status": STATUS_NAMES[now],
+                "previous_status": before,
+                "current_status": now,
             }
-            for uid, (node, before, now) in enumerate(zip(nodes, track.statuses, statuses, strict=True), start=1)
-            if before is not now
+            for uid, (name, before, now) in enumerate(zip(track.names, track.statuses, tree.statuses, strict=True),
+                                                      start=1)
+            if before != now
         ]
-        track.statuses = statuses
+        track.statuses = tree.statuses
         self._write("/tree", "nav2_msgs/msg/BehaviorTreeLog", ns, {"timestamp": stamp, "event_log": changes})
         return True
 

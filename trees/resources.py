@@ -1,6 +1,6 @@
 """Compile-time checks of what nodes need of robots: capabilities, sensors, team-member parameters, resources.
 
-The vocabulary is :mod:`marsupial.world.capabilities`: a robot kind has the
+The vocabulary is :mod:`marsupial.api.capabilities`: a robot kind has the
 capabilities its onboard interface class provides and the resources its
 commands drive. A skill claims resources (``Skill.claims``); two branches
 of one ``parallel`` must not claim one resource of one robot, since both
@@ -15,8 +15,8 @@ import typing
 from collections.abc import Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
-from marsupial.world.capabilities import CAPABILITIES, provides
-from marsupial.world.errors import UnknownNameError
+from marsupial.api.capabilities import CAPABILITIES, provides
+from marsupial.api.errors import UnknownNameError
 
 from .arbitration import ANY_RESOURCE
 from .skill import MissionNode, Skill, TeamMember
@@ -26,25 +26,25 @@ if TYPE_CHECKING:
 
 
 @functools.cache
-def _onboard_class(kind: str) -> Any:
+def _view_class(kind: str) -> Any:
     from marsupial.world.robots import robot_class
 
-    return robot_class(kind).onboard_class
+    return robot_class(kind).view_class
 
 
 @functools.cache
 def kind_capabilities(kind: str) -> frozenset[type]:
-    """The capabilities (protocols of :mod:`marsupial.world.capabilities`) robots of ``kind`` have.
+    """The capabilities (protocols of :mod:`marsupial.api.capabilities`) robots of ``kind`` have.
 
     Raises :class:`UnknownNameError` for an unknown kind.
     """
-    onboard = _onboard_class(kind)
+    onboard = _view_class(kind)
     return frozenset(c for c in CAPABILITIES if provides(onboard, c))
 
 
 def kind_resources(kind: str) -> frozenset[str]:
     """The resources robots of ``kind`` have (those their commands drive)."""
-    return frozenset(_onboard_class(kind).resources())
+    return frozenset(_view_class(kind).resources())
 
 
 def members_with(team: Mapping[str, Any], capabilities: Iterable[type] | None) -> list[str]:

@@ -41,27 +41,27 @@ from types import FrameType
 from typing import Any
 
 import py_trees
-from py_trees.common import Status
 from rich.console import Console
 from rich.live import Live
 from rich.table import Table
 from rich.text import Text
 
+from marsupial.api.errors import UnknownNameError, WorldError
+from marsupial.api.ticks import OperatorCommand
 from marsupial.world import World
 from marsupial.world.disturbances import apply_disturbances
-from marsupial.world.errors import UnknownNameError, WorldError
 from marsupial.world.kidnap import spread_pose
 from marsupial.world.scoring import Referee
 from marsupial.world.team_link import TeamLinkConfig
 
-from .arbitration import Arbiter
-from .compiler import CompiledTree, compile_mission
+from .bridge import WorldBridge
+from .compiler import compile_mission
 from .errors import MissionError, check_seed, one_of, suggest
+from .isolation import TreeSide, open_tree_side
 from .mission import Mission, load_mission
-from .operator import CONTROL_COMMANDS, OperatorChannel, OperatorCommand
+from .operator import CONTROL_COMMANDS, OperatorChannel
 from .recorder import Recorder, Terminated
 from .sinks import Sink
-from .skill import RunContext
 
 #: outcome -> process exit code
 EXIT_CODES = {"success": 0, "interrupted": 130, "terminated": 143}
@@ -224,16 +224,15 @@ class _Progress:
             self.live.start()
         self._last = 0.0
 
-    def update(self, world: World, tree: CompiledTree, wall: float, paused: bool) -> None:
+    def update(self, world: World, active: Mapping[str, Sequence[str]], wall: float, paused: bool) -> None:
         if self.live is None or time.perf_counter() - self._last < 0.1:
             return
         self._last = time.perf_counter()
-        active = tree.active_skills()
         parts = [f"t {world.now:7.1f} s", f"RTF {world.now / wall if wall > 0 else 0:5.1f}x"]
         if paused:
             parts.append("PAUSED")
         for name, robot in world.robots.items():
-            skills = ", ".join(s.name for s in active.get(name, ())) or "idle"
+            skills = ", ".join(active.get(name, ())) or "idle"
             soc = battery_of(robot)
             parts.append(f"{name}: {skills}" + (f" {soc:.0%}" if soc is not None else ""))
         self.live.update(Text(" | ".join(parts)))
@@ -309,6 +308,8 @@ def run_mission(
     console: Console | None = None,
     pace: float | None = None,
     sinks: Sequence[Sink] = (),
+    isolate: bool = False,
+    record_inputs: bool = False,
 ) -> RunResult:
     """Run ``mission`` (a :class:`Mission`, or a name/path loaded with ``overrides``) to its end.
 
@@ -328,6 +329,10 @@ def run_mission(
             as fast as possible, or real time with ``gui`` or ``operator_stdin``.
         sinks: more outputs for the recorder's messages besides ``log_path`` (e.g. a live
             :class:`~marsupial.trees.live.LiveSink`), closed at the end of the run.
+        isolate: run the tree and its skills in a process of their own, exchanging the same messages with
+            the world's process in lockstep (:mod:`marsupial.trees.isolation`).
+        record_inputs: log every message the tree received and the commands it answered with (``/replay``),
+            for ``marsupial replay LOG --against MISSION`` (:mod:`marsupial.trees.exchange_log`).
 
     Raises :class:`MissionError` for bad input, before the log file is created.
     """
@@ -343,26 +348,25 @@ def run_mission(
     console = console or Console()
 
     py_trees.blackboard.Blackboard.clear()
-    context = RunContext(operator=channel)
-    tree = compile_mission(mission, context)  # bad input fails here, before world and log exist
+    compile_mission(mission)  # bad input fails here, before world and log exist
     world = build_world(mission, seed, gui)
-    context.attach(world)
     if operator_stdin:
         channel.read_from(sys.stdin)
 
     log = Path(log_path) if log_path is not None else None
     recorder = _open_recorder(mission, seed, until, log, sinks, record_images, world)
-    context.recorder = recorder
-    world.add_actor(Referee(world, context))  # truth-based scores, world side: skills never read them
+    bridge = WorldBridge(world, recorder, record_inputs)
+    world.add_actor(Referee(world, bridge.scores))  # truth-based scores, world side: no node can read them
     display = _Progress(console, progress)
     outcome, message, ticks = "failure", "", _TickCount()
     started = time.perf_counter()
+    host: TreeSide | None = None
     try:
         with recorder if recorder is not None else contextlib.nullcontext(), _signals_end_the_run(recorder):
-            outcome = _loop(mission, tree, world, context, until, pace, display, started, ticks)
-            if tree.root.status == Status.RUNNING:
-                tree.root.stop(Status.INVALID)  # skills still running leave their robots safe
-            context.event("run_end", outcome=outcome, sim_time=world.now, ticks=ticks.n)
+            host = open_tree_side(mission, bridge.setup(mission, seed), record_images, isolate)
+            outcome = _loop(mission, host, bridge, channel, until, pace, display, started, ticks)
+            bridge.apply(host.stop())  # skills still running leave their robots safe
+            _event(recorder, world.now, "run_end", outcome=outcome, sim_time=world.now, ticks=ticks.n)
     except KeyboardInterrupt:
         outcome = "interrupted"
     except Terminated:
@@ -371,6 +375,8 @@ def run_mission(
         outcome, message = "error", f"{type(err).__name__}: {err}\n{traceback.format_exc()}"
     finally:
         display.stop()
+        if host is not None:
+            host.close()
     result = RunResult(
         mission=mission.name,
         outcome=outcome,
@@ -378,7 +384,7 @@ def run_mission(
         sim_time=world.now,
         ticks=ticks.n,
         wall_time=time.perf_counter() - started,
-        metrics=dict(context.metrics),
+        metrics=dict(bridge.metrics),
         robots={n: {"position": r.pose()[0].tolist(), "battery": battery_of(r)} for n, r in world.robots.items()},
         log_path=log,
         message=message,
@@ -387,6 +393,12 @@ def run_mission(
     if progress:
         console.print(summary_table(result))
     return result
+
+
+def _event(recorder: Recorder | None, t: float, kind: str, **fields: Any) -> None:
+    """Record a runner event at sim time ``t`` (s) when the run has a recorder."""
+    if recorder is not None:
+        recorder.log_event(t, kind, **fields)
 
 
 def _positive_finite(value: object) -> bool:
@@ -438,9 +450,9 @@ def _estimated_pose(robot: Any) -> tuple[Any, Any]:
 
 def _loop(
     mission: Mission,
-    tree: CompiledTree,
-    world: World,
-    context: RunContext,
+    host: TreeSide,
+    bridge: WorldBridge,
+    channel: OperatorChannel,
     until: float | None,
     pace: float | None,
     display: _Progress,
@@ -453,10 +465,10 @@ def _loop(
     live operator or live view: a person watches or types); the simulation
     itself never reads the clock.
     """
-    recorder, channel, arbiter = context.recorder, context.operator, context.arbiter
-    assert channel is not None
+    world, recorder = bridge.world, bridge.recorder
     period = 1.0 / mission.spec.run.tick_hz
-    context.event("run_start", mission=mission.name, seed=world.seed, tick_hz=mission.spec.run.tick_hz, until=until)
+    _event(recorder, world.now, "run_start", mission=mission.name, seed=world.seed,
+           tick_hz=mission.spec.run.tick_hz, until=until)
     if recorder is not None:
         recorder.log_scene(world)
     next_metric = next_pose = 0.0
@@ -464,25 +476,45 @@ def _loop(
     while True:
         now = world.now
         next_pose = _log_poses(recorder, world, now, next_pose)
-        next_metric = _log_batteries(context, world, now, next_metric)
-        aborted, paused = _operator_commands(context, channel, tree, world, now, paused)
-        if aborted:
+        next_metric = _log_batteries(bridge, world, now, next_metric)
+        said = channel.poll(now)
+        for command in said:
+            _note_command(recorder, host, command, now)
+        if any(c.say == "abort" for c in said):
             return "aborted"
-        if not paused:
-            outcome = _tick(tree, arbiter, recorder, ticks, now)
-            if outcome is not None:
-                return outcome
+        pausing = _paused(recorder, said, paused, now)
+        if not pausing:
+            output = host.tick(bridge.tick_input(said))
+            bridge.apply(output)
+            ticks.n += 1
+            if output.status in ("SUCCESS", "FAILURE"):
+                return "success" if output.status == "SUCCESS" else "failure"
+        elif not paused:
+            bridge.apply(host.pause(bridge.tick_input(said, "pause")))  # every robot left safe in a tick of its own
+        paused = pausing
         if until is not None and now + 1e-9 >= until:
             return "time_limit"
         world.step(period)
         wall = _hold_pace(world, pace, started)
-        display.update(world, tree, wall, paused)
+        display.update(world, host.active, wall, paused)
+
+
+def _paused(recorder: Recorder | None, said: list[OperatorCommand], paused: bool, now: float) -> bool:
+    """Whether the run is paused after the operator's commands ``said`` at ``now`` (s); state changes logged."""
+    for command in said:
+        if command.say == "pause" and not paused:
+            paused = True
+            _event(recorder, now, "state_change", state="paused")
+        elif command.say == "resume" and paused:
+            paused = False
+            _event(recorder, now, "state_change", state="running")
+    return paused
 
 
 def _log_poses(recorder: Any, world: World, now: float, due: float) -> float:
     """Log every robot's true and estimated pose if the pose period is ``due`` at ``now`` (s); the next due time.
 
-    ``recorder`` is the run context's (a :class:`Recorder` or ``None``).
+    ``recorder`` is the run's (a :class:`Recorder` or ``None``).
     """
     if recorder is None or now + 1e-9 < due:
         return due
@@ -494,63 +526,22 @@ def _log_poses(recorder: Any, world: World, now: float, due: float) -> float:
     return due + POSE_PERIOD
 
 
-def _log_batteries(context: RunContext, world: World, now: float, due: float) -> float:
+def _log_batteries(bridge: WorldBridge, world: World, now: float, due: float) -> float:
     """Record each battery's state of charge if the metric period is ``due`` at ``now`` (s); the next due time."""
     if now + 1e-9 < due:
         return due
     for name, robot in world.robots.items():
         soc = battery_of(robot)
         if soc is not None:
-            context.metric("battery_soc", soc, robot=name)
+            bridge.scores.metric("battery_soc", soc, robot=name)
     return due + METRIC_PERIOD
 
 
-def _operator_commands(
-    context: RunContext, channel: OperatorChannel, tree: CompiledTree, world: World, now: float, paused: bool
-) -> tuple[bool, bool]:
-    """Apply the operator commands due at ``now`` (s): whether one aborts the run, and whether the run is paused."""
-    for command in channel.poll(now):
-        _note_command(context, tree, command, now)
-        if command.say == "abort":
-            return True, paused
-        if command.say == "pause" and not paused:
-            paused = True
-            _stop_all_robots(context, world)
-            context.event("state_change", state="paused")
-        elif command.say == "resume" and paused:
-            paused = False
-            context.event("state_change", state="running")
-    return False, paused
-
-
-def _note_command(context: RunContext, tree: CompiledTree, command: OperatorCommand, now: float) -> None:
+def _note_command(recorder: Recorder | None, host: TreeSide, command: OperatorCommand, now: float) -> None:
     """Record an operator command, with a log warning when neither the runner nor a node listens to it."""
-    recorder = context.recorder
-    context.event("operator", command=command.say, source=command.source, why=command.why)
-    if command.say not in CONTROL_COMMANDS and command.say not in tree.listens and recorder is not None:
+    _event(recorder, now, "operator", command=command.say, source=command.source, why=command.why)
+    if command.say not in CONTROL_COMMANDS and command.say not in host.listens and recorder is not None:
         recorder.log_text(now, "warning", f"no node listens to operator command '{command.say}'")
-
-
-def _stop_all_robots(context: RunContext, world: World) -> None:
-    """Pause: the arbiter leaves every robot's resources safe in a tick of the operator's own."""
-    arbiter = context.arbiter
-    arbiter.new_tick()
-    for name in world.robots:
-        arbiter.safe_stop(context.onboard(name), "operator", "operator")
-
-
-def _tick(
-    tree: CompiledTree, arbiter: Arbiter, recorder: Recorder | None, ticks: _TickCount, now: float
-) -> str | None:
-    """Tick the tree once (stamped by the arbiter, snapshot in the log); the outcome once the root has finished."""
-    arbiter.new_tick()
-    tree.root.tick_once()
-    ticks.n += 1
-    if recorder is not None:
-        recorder.log_tree(now, tree.root)
-    if tree.root.status in (Status.SUCCESS, Status.FAILURE):
-        return "success" if tree.root.status == Status.SUCCESS else "failure"
-    return None
 
 
 def _hold_pace(world: World, pace: float | None, started: float) -> float:

@@ -8,7 +8,7 @@ when the mission is compiled:
 * ``reads`` / ``writes`` — the blackboard keys it uses, formatted with the
   node's ``robot`` and its parameters (``"{robot}/coverage"``, ``"{key}"``);
 * ``robot_kinds`` — the capabilities its robot must have (protocols of
-  :mod:`marsupial.world.capabilities`, e.g. ``(Rotorcraft,)``; ``None``: any
+  :mod:`marsupial.api.capabilities`, e.g. ``(Rotorcraft,)``; ``None``: any
   robot; set ``uses_robot = False`` for nodes that take no robot, like
   ``wait``) and ``sensors``, the sensors it reads on it;
 * ``claims`` — the robot resources a skill commands (``"rotors"`` on its own
@@ -39,27 +39,23 @@ implements :meth:`Condition.check` and never returns RUNNING.
 from __future__ import annotations
 
 import typing
+import zlib
 from collections.abc import Iterator
-from dataclasses import InitVar, dataclass, field
-from typing import TYPE_CHECKING, Any, ClassVar, ForwardRef, Generic, TypeVar, cast
+from dataclasses import dataclass, field
+from typing import Any, ClassVar, ForwardRef, Generic, TypeVar, cast
 
+import numpy as np
 import py_trees
 from py_trees.common import Access, Status
 from pydantic import BaseModel, ConfigDict, model_validator
 
-from marsupial.world.errors import UnknownNameError
+from marsupial.api.errors import UnknownNameError
+from marsupial.api.priors import PRIORS, BuildingPlan
+from marsupial.api.ticks import LogRecord
+from marsupial.api.views import LinkState, LinkView, RobotState, RobotView
 
-from .arbitration import ANY_RESOURCE, Arbiter, Claimant, CommandPort, Stamp
-
-if TYPE_CHECKING:
-    import numpy as np
-
-    from marsupial.world import World
-    from marsupial.world.onboard import Onboard
-    from marsupial.world.team_link import LinkPort
-
-    from .operator import OperatorChannel
-
+from .arbitration import ANY_RESOURCE, Arbiter, Claimant, NodeSink, Stamp
+from .operator import OperatorLatch
 
 _STATUSES = frozenset(Status)
 
@@ -105,7 +101,7 @@ class TeamMember:
     ``carrier: Annotated[str, TeamMember(Carrier)] = "carrier"``: the
     compiler checks, like ``robot:``, that the value names a member of the
     mission's ``team:`` (with a did-you-mean) whose kind has ``capability``
-    (a protocol of :mod:`marsupial.world.capabilities`), and reports the
+    (a protocol of :mod:`marsupial.api.capabilities`), and reports the
     parameter's file:line otherwise. An optional member
     (``Annotated[str, TeamMember()] | None``) is checked when given.
     """
@@ -115,89 +111,65 @@ class TeamMember:
 
 @dataclass
 class RunContext:
-    """What the nodes of one run share: sim time, the team's onboard interfaces, the arbiter, operator, recorder.
+    """What the nodes of one run share, as data: sim time, the team's readings and models, the link, the operator.
 
-    The world itself stays behind this object (the sensing boundary, see
-    :mod:`marsupial.world.onboard`): nodes get the simulated time
+    Nothing here leads to the world (the sensing boundary, ``docs/sensing.md``):
+    the runtime fills it from the messages of each tick
+    (:class:`~marsupial.api.ticks.TickInput`). Nodes get the simulated time
     (:attr:`now`), seeded random streams (:meth:`rng`), each team member's
-    onboard interface (:meth:`onboard`), the team link (:meth:`link`) and the
-    scene knowledge the mission declares (:meth:`prior`).
-    ``world`` is ``None`` when a tree is compiled only to be drawn or
-    exported. Events and metrics go to the recorder (if any) stamped with
-    the simulated time; the last value of every metric is kept in
-    :attr:`metrics` for the run's result.
+    view through their own ports (:meth:`MissionNode.member`), the team link
+    (:attr:`link`), the operator's pending commands (:attr:`operator`) and the
+    scene knowledge the mission declares (:meth:`prior`). Events, metrics and
+    images go to :attr:`records`, which the runtime passes to the recorder
+    after the tick; the last value of every metric a node recorded is kept in
+    :attr:`metrics`. A context without a team is one a tree is compiled in only
+    to be drawn or exported.
     """
 
-    world: InitVar[World | None] = None
     arbiter: Arbiter = field(default_factory=Arbiter)
-    operator: OperatorChannel | None = None
-    recorder: Any = None
+    operator: OperatorLatch = field(default_factory=OperatorLatch)
+    seed: int = 0
+    now: float = 0.0
+    robots: dict[str, RobotState] = field(default_factory=dict)
+    views: dict[str, type[RobotView]] = field(default_factory=dict)
+    link: LinkState = field(default_factory=LinkState)
+    priors: dict[str, BuildingPlan] = field(default_factory=dict)
+    record_images: bool = False
+    records: list[LogRecord] = field(default_factory=list)
     metrics: dict[str, float] = field(default_factory=dict)
-
-    def __post_init__(self, world: World | None) -> None:
-        self.__world = world
-        self.__plan: Any = None
-
-    def attach(self, world: World) -> None:
-        """Run the nodes compiled with this context in ``world`` (the runner calls it once the world is built)."""
-        self.__world = world
-        self.__plan = None
-
-    def _require_world(self, what: str) -> World:
-        if self.__world is None:
-            raise RuntimeError(f"{what}: the tree was compiled without a world and cannot run")
-        return self.__world
-
-    @property
-    def now(self) -> float:
-        """Simulated time (s) of the run (0 without a world)."""
-        return self.__world.now if self.__world is not None else 0.0
 
     def rng(self, key: str) -> np.random.Generator:
         """A seeded random stream for ``key`` (derived from the run's seed; e.g. a planner's samples)."""
-        return self._require_world(f"rng({key!r})").rng_for(f"node/{key}")
+        return np.random.default_rng([self.seed, zlib.crc32(f"node/{key}".encode())])
 
     def team(self) -> tuple[str, ...]:
         """Names of the team members."""
-        return tuple(self.__world.robots) if self.__world is not None else ()
+        return tuple(self.robots)
 
-    def onboard(self, name: str) -> Onboard:
-        """The onboard interface of team member ``name`` (:mod:`marsupial.world.onboard`); the error lists the team.
+    def state(self, name: str) -> RobotState:
+        """The readings and model of team member ``name``; the error lists the team."""
+        try:
+            return self.robots[name]
+        except KeyError:
+            raise UnknownNameError("team member", name, self.robots) from None
 
-        Nodes command and read it through their ports (:meth:`MissionNode.member`), which arbitrate its commands.
+    def prior(self, name: str) -> BuildingPlan:
+        """The scene knowledge named ``name`` that the mission declares (:data:`marsupial.api.priors.PRIORS`).
+
+        ``"building_plan"``: the :class:`~marsupial.api.priors.BuildingPlan` of
+        the mission's scene (walls and door frames, zones, guide paths), copied
+        from the scene file's declared data, never the bodies.
         """
-        from marsupial.world.onboard import onboard_of
-
-        return onboard_of(self._require_world(f"robot '{name}'").robot(name))
-
-    def link(self, name: str) -> LinkPort:
-        """The team link as team member ``name`` uses it (send as it, read the others' telemetry)."""
-        from marsupial.world.team_link import LinkPort
-
-        world = self._require_world(f"team link of '{name}'")
-        world.robot(name)  # a clear error for an unknown member
-        return LinkPort(world.team_link, name)
-
-    def prior(self, name: str) -> Any:
-        """The scene knowledge named ``name`` that the mission declares (:data:`marsupial.world.priors.PRIORS`).
-
-        ``"building_plan"``: the :class:`~marsupial.world.priors.BuildingPlan`
-        of the mission's scene (walls and door frames, zones, guide paths),
-        copied once from the scene file's declared data, never the bodies.
-        """
-        from marsupial.world.priors import PRIORS, BuildingPlan
-
         if name not in PRIORS:
             raise UnknownNameError("prior", name, PRIORS)
-        world = self._require_world(f"prior {name!r}")
-        if self.__plan is None:
-            self.__plan = BuildingPlan.of(world.scene)
-        return self.__plan
+        try:
+            return self.priors[name]
+        except KeyError:
+            raise RuntimeError(f"prior {name!r}: the tree was compiled without a world and cannot run") from None
 
     def event(self, kind: str, **fields: Any) -> None:
         """Record an event of ``kind`` (``preemption``, ``operator``, …) at the current sim time."""
-        if self.recorder is not None:
-            self.recorder.log_event(self.now, kind, **fields)
+        self.records.append(LogRecord("event", kind, None, fields))
 
     def metric(self, name: str, value: float, **labels: Any) -> None:
         """Record metric ``name`` = ``value`` at the current sim time and keep its last value.
@@ -207,13 +179,12 @@ class RunContext:
         """
         key = f"{name}[{','.join(str(v) for v in labels.values())}]" if labels else name
         self.metrics[key] = float(value)
-        if self.recorder is not None:
-            self.recorder.log_metric(self.now, name, float(value), **labels)
+        self.records.append(LogRecord("metric", name, float(value), labels))
 
     def image(self, camera: str, rgb: Any, **options: Any) -> None:
-        """Record a camera frame (``Recorder.log_image``) when the run records images (``--record-images``)."""
-        if self.recorder is not None:
-            self.recorder.log_image(self.now, camera, rgb, **options)
+        """Record a camera frame when the run records images (``--record-images``)."""
+        if self.record_images:
+            self.records.append(LogRecord("image", camera, rgb, options))
 
 
 P = TypeVar("P", bound=NodeParams)
@@ -252,7 +223,8 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P]):
     writes: ClassVar[tuple[str, ...]] = ()
     #: capabilities its robot must have (``None``: any robot); ignored when ``uses_robot`` is False
     robot_kinds: ClassVar[tuple[type, ...] | None] = None
-    #: sensors it reads on its robot (short names, checked against the robot kind when it declares its sensors)
+    #: sensors it reads: ``"<sensor>"`` of its robot or ``"{param}/<sensor>"`` of a member (short names, formatted
+    #: with the parameters); only these are delivered to it, each tick it is ticked
     sensors: ClassVar[tuple[str, ...]] = ()
     #: resources it commands: ``"<resource>"`` of its robot or ``"{param}/<resource>"`` of a member (``None``: every
     #: resource of its robot)
@@ -277,7 +249,7 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P]):
         for kind in cls.robot_kinds or ():
             if not isinstance(kind, type):
                 raise TypeError(
-                    f"{cls.__name__}: robot_kinds lists capabilities (protocols of marsupial.world.capabilities, "
+                    f"{cls.__name__}: robot_kinds lists capabilities (protocols of marsupial.api.capabilities, "
                     f"e.g. Rotorcraft), not {kind!r}"
                 )
 
@@ -288,8 +260,12 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P]):
         self.robot_name = robot
         #: registry name of the node (``"goto"``, ``"battery_below"``); set by the compiler
         self.kind: str = type(self).__name__.lower()
-        self._port: CommandPort | None = None
         self._claimant = Claimant(self.id, name, frozenset(self.claimed(self.params, robot)))
+        #: the ``(robot, sensor)`` pairs it reads (delivered while it is ticked), and the last tick it was ticked in
+        self.reads_sensors = frozenset(self.sensors_read(self.params, robot))
+        self.ticked = 0
+        self._sink = NodeSink(self.context.arbiter, self._claimant, self.reads_sensors)
+        self._views: dict[str, RobotView] = {}
         self.blackboard = self.attach_blackboard_client(name=name)
         for key in self.read_keys(self.params, robot):
             self.blackboard.register_key(key, access=Access.READ)
@@ -313,6 +289,21 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P]):
         return cls._format_keys(cls.writes, params, robot)
 
     @classmethod
+    def _member_pairs(cls, entries: tuple[str, ...], params: P, robot: str | None) -> tuple[tuple[str, str], ...]:
+        """``(member, item)`` pairs of ``"<item>"`` (this node's robot) / ``"{param}/<item>"`` entries.
+
+        An entry on a member named by a parameter left unset (``None``) names nothing.
+        """
+        values = {**params.model_dump(), "robot": robot}
+        pairs = []
+        for entry in entries:
+            member, _, item = entry.rpartition("/")
+            name = member.format(**values) if member else robot
+            if name not in (None, "None"):
+                pairs.append((str(name), item.format(**values)))
+        return tuple(pairs)
+
+    @classmethod
     def claimed(cls, params: P, robot: str | None) -> tuple[tuple[str, str], ...]:
         """``(robot, resource)`` pairs this node commands, for these parameters and robot (resource ``*``: any).
 
@@ -320,14 +311,12 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P]):
         """
         if cls.claims is None:
             return ((robot, ANY_RESOURCE),) if robot is not None else ()
-        values = {**params.model_dump(), "robot": robot}
-        pairs = []
-        for claim in cls.claims:
-            member, _, resource = claim.rpartition("/")
-            name = member.format(**values) if member else robot
-            if name not in (None, "None"):
-                pairs.append((str(name), resource))
-        return tuple(pairs)
+        return cls._member_pairs(cls.claims, params, robot)
+
+    @classmethod
+    def sensors_read(cls, params: P, robot: str | None) -> tuple[tuple[str, str], ...]:
+        """``(robot, sensor)`` pairs this node reads, for these parameters and robot: the runtime delivers these."""
+        return cls._member_pairs(cls.sensors, params, robot)
 
     @classmethod
     def summary(cls) -> str:
@@ -340,6 +329,7 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P]):
         Same semantics (initialise when not RUNNING, update, stop on a final
         status); leaves are most of a tree, so this keeps large trees fast.
         """
+        self.ticked = self.context.arbiter.tick
         if self.status != Status.RUNNING:
             self.initialise()
         new_status = self.update()
@@ -360,24 +350,32 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P]):
         return self.context.now
 
     @property
-    def robot(self) -> CommandPort:
-        """The onboard interface of the robot this node acts on, through the arbiter (reads pass through)."""
-        if self._port is None:
-            if self.robot_name is None:
-                raise RuntimeError(f"node '{self.name}' has no robot")
-            self._port = self.member(self.robot_name)
-        return self._port
+    def robot(self) -> Any:
+        """The view of the robot this node acts on (:mod:`marsupial.api.views`): its readings, model and commands."""
+        if self.robot_name is None:
+            raise RuntimeError(f"node '{self.name}' has no robot")
+        return self.member(self.robot_name)
 
-    def member(self, name: str) -> CommandPort:
-        """Team member ``name``'s onboard interface as this node commands it (claimed resources, via the arbiter)."""
-        return CommandPort(self.context.onboard(name), self.context.arbiter, self._claimant)
+    def member(self, name: str) -> Any:
+        """Team member ``name``'s view as this node sees it: this tick's readings, commands to claimed resources."""
+        view = self._views.get(name)
+        if view is None:
+            context = self.context
+            state = context.state(name)
+            view = self._views[name] = context.views[name](state, self._sink)
+        return view
 
     @property
-    def link(self) -> LinkPort:
+    def link(self) -> LinkView:
         """The team link as this node's robot uses it (telemetry of the others: ``link.latest(name)``)."""
         if self.robot_name is None:
             raise RuntimeError(f"node '{self.name}' has no robot and no team link")
-        return self.context.link(self.robot_name)
+        return self.link_of(self.robot_name)
+
+    def link_of(self, name: str) -> LinkView:
+        """The team link as team member ``name`` uses it (this node sends as it)."""
+        self.context.state(name)  # a clear error for an unknown member
+        return LinkView(name, self.context.link, self._sink)
 
     def read(self, key: str, default: Any = None) -> Any:
         """Blackboard value of a declared read key, ``default`` while nothing wrote it."""

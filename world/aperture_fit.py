@@ -26,7 +26,7 @@ then
 
 Clearance, precisely: for an opening P (a polygon in the wall plane) and the
 MAV's fronto-parallel outline S as the profile analysis takes it (C_m in
-metres, :func:`~marsupial.skills.aperture.silhouette.mav_silhouette`: the
+metres, :func:`~marsupial.api.silhouette.mav_silhouette`: the
 Tello in the apparatus's cradle seen along its body x, nose first, §IV-B),
 the clearance is the largest distance by which S, turned by any angle θ
 about its centre of mass and moved to any centre t, can stay inside P:
@@ -61,9 +61,10 @@ import shapely
 from shapely import affinity
 from shapely.geometry import MultiPolygon, Polygon, box
 
+from marsupial.api.errors import UnknownNameError, WorldError
+
 from .apertures import aperture_outline
 from .decoys import wall_pieces
-from .errors import UnknownNameError, WorldError
 from .rim_contacts import RIM_TAG
 from .scene import Zone
 
@@ -125,7 +126,7 @@ def convex_parts(region: Polygon) -> list[Polygon]:
 @cache
 def _mav_parts() -> tuple[np.ndarray, ...]:
     """The convex parts of the MAV's fronto-parallel outline (m, about its centre of mass), each ``(n, 2)``."""
-    from marsupial.skills.aperture.silhouette import mav_silhouette  # the skills' C_m, in metres
+    from marsupial.api.silhouette import mav_silhouette  # the skills' C_m, in metres
 
     outline = mav_silhouette()  # image axes u right, v down: the wall plane's x, −z as the camera sees it
     parts = convex_parts(Polygon(np.c_[outline[:, 0], -outline[:, 1]]))

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 import pybullet
 
-from .errors import UnknownNameError
+from marsupial.api.errors import UnknownNameError
 
 if TYPE_CHECKING:
     from .robots.base import Robot

@@ -39,7 +39,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .errors import WorldError
+from marsupial.api.errors import WorldError
+
 from .scene import Zone
 
 if TYPE_CHECKING:

@@ -35,9 +35,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet
 
+from marsupial.api.errors import UnknownNameError, WorldError
+
 from .aperture_fit import CLEARANCE_MAX_M, ApertureFit, ApertureFitSpec, check_shapes, fit_aperture
 from .decoys import DecoySpec, cut_decoys
-from .errors import UnknownNameError, WorldError
 from .kidnap import Kidnap, spread_pose, teleport
 
 if TYPE_CHECKING:

@@ -21,6 +21,8 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from marsupial.api.readings import BatteryStatus
+
 from .sensors.base import Sensor, SensorConfig
 
 if TYPE_CHECKING:
@@ -221,15 +223,6 @@ def hover_endurance_s(spec: BatterySpec, power_W: float, soc: float = 1.0, dt: f
         battery.draw(power_W, dt)
         t += dt
     return t
-
-
-@dataclass(frozen=True)
-class BatteryStatus:
-    """One battery-gauge sample: SOC (%), terminal voltage (V), current (A, > 0 discharging)."""
-
-    soc_percent: float
-    voltage: float
-    current: float
 
 
 class BatteryGauge(Sensor[BatteryStatus]):

@@ -14,7 +14,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pybullet
 
-from .errors import WorldError
+from marsupial.api.errors import WorldError
+
 from .robots.wheeled import WheeledRobot
 
 if TYPE_CHECKING:

@@ -53,7 +53,7 @@ import pybullet
 import shapely
 import yaml
 
-from .errors import UnknownNameError, WorldError
+from marsupial.api.errors import UnknownNameError, WorldError
 
 if TYPE_CHECKING:
     from .world import World

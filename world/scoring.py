@@ -1,6 +1,6 @@
 """The referee: truth-based scores of a run, measured on the world side and written to the log.
 
-Skills decide from what the robots sense (:mod:`marsupial.world.onboard`);
+Skills decide from what the robots sense (:mod:`marsupial.api.views`);
 how well they did is measured here, on simulator truth, and only recorded —
 no skill or condition can read it back. The runner attaches one
 :class:`Referee` to every run. It records, with the same names and labels

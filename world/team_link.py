@@ -22,6 +22,8 @@ import itertools
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from marsupial.api.readings import LinkMessage
+
 if TYPE_CHECKING:
     from .world import World
 
@@ -52,17 +54,6 @@ class TeamLinkConfig:
         )
 
 
-@dataclass(frozen=True)
-class Message:
-    """One delivered message: sender, topic, send and delivery times (s), payload."""
-
-    sender: str
-    topic: str
-    sent: float
-    delivered: float
-    payload: Any
-
-
 class TeamLink:
     """The radio shared by one world's team (an actor: it delivers due messages every physics step)."""
 
@@ -70,13 +61,14 @@ class TeamLink:
         self.world = world
         self.config = config or TeamLinkConfig()
         self.rng = world.rng_for("team_link")
-        self._queue: list[tuple[int, int, Message]] = []
+        self._queue: list[tuple[int, int, LinkMessage]] = []
         self._order = itertools.count()
-        self._latest: dict[tuple[str, str], Message] = {}
-        self._latest_on: dict[str, Message] = {}
+        self._latest: dict[tuple[str, str], LinkMessage] = {}
+        self._latest_on: dict[str, LinkMessage] = {}
         self._telemetry_period = max(1, world.clock.steps_for(1.0 / self.config.telemetry_hz))
         self.sent = 0
         self.dropped = 0
+        self._delivered: list[LinkMessage] = []
 
     def send(self, sender: str, topic: str, payload: Any) -> None:
         """Broadcast ``payload`` from ``sender`` on ``topic`` now; it arrives later or is lost."""
@@ -87,14 +79,19 @@ class TeamLink:
             return
         delay = cfg.latency_s + (abs(float(self.rng.normal(0.0, cfg.jitter_s))) if cfg.jitter_s > 0 else 0.0)
         due = clock.steps + clock.steps_for(delay)
-        message = Message(sender, topic, clock.now, due * clock.dt, payload)
+        message = LinkMessage(sender, topic, clock.now, due * clock.dt, payload)
         heapq.heappush(self._queue, (due, next(self._order), message))
 
-    def latest(self, sender: str, topic: str) -> Message | None:
+    def latest(self, sender: str, topic: str) -> LinkMessage | None:
         """The newest message delivered so far from ``sender`` on ``topic`` (``None``: nothing yet)."""
         return self._latest.get((sender, topic))
 
-    def latest_on(self, topic: str) -> Message | None:
+    def take_delivered(self) -> tuple[LinkMessage, ...]:
+        """The messages delivered since the last call (each the newest of its sender and topic then), in order."""
+        delivered, self._delivered = tuple(self._delivered), []
+        return delivered
+
+    def latest_on(self, topic: str) -> LinkMessage | None:
         """The newest message delivered so far on ``topic`` from any sender (``None``: nothing yet)."""
         return self._latest_on.get(topic)
 
@@ -112,6 +109,7 @@ class TeamLink:
             known = self._latest.get(key)
             if known is None or known.sent <= message.sent:  # a late older message does not replace a newer one
                 self._latest[key] = message
+                self._delivered.append(message)
             known = self._latest_on.get(message.topic)
             if known is None or known.sent <= message.sent:
                 self._latest_on[message.topic] = message
@@ -121,20 +119,3 @@ class TeamLink:
                 if estimator is not None:
                     self.send(name, "estimate", estimator.estimate())
 
-
-class LinkPort:
-    """The team link as one robot's computer uses it: send as that robot, read what the others sent."""
-
-    __slots__ = ("name", "__link")  # the private slot is name-mangled to _LinkPort__link
-
-    def __init__(self, link: TeamLink, name: str):
-        self.name = name
-        self.__link = link
-
-    def send(self, topic: str, payload: Any) -> None:
-        """Broadcast ``payload`` on ``topic`` as this robot."""
-        self.__link.send(self.name, topic, payload)
-
-    def latest(self, sender: str, topic: str = "estimate") -> Message | None:
-        """The newest delivered message of ``sender`` on ``topic`` (default: its estimate telemetry)."""
-        return self.__link.latest(sender, topic)

@@ -23,7 +23,8 @@ import numpy as np
 import pybullet
 from pybullet_utils.bullet_client import BulletClient
 
-from .errors import UnknownNameError
+from marsupial.api.errors import UnknownNameError
+
 from .quiet import quiet_fd
 from .team_link import TeamLink, TeamLinkConfig
 

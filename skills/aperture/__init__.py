@@ -30,6 +30,8 @@ encoders and the arm's URDF model):
   analysis and launch plans.
 """
 
+from marsupial.api.silhouette import mav_contour, mav_silhouette
+
 from .arm_motion import ArmCollisionModel, ArmPlanParams, plan_arm_path
 from .belief import ApertureBelief, BeliefParams, aperture_region
 from .detection import ApertureCandidate, DepthFrame, DetectionParams, detect_apertures, eye_in_hand_frame
@@ -37,7 +39,6 @@ from .launch_pose import LaunchParams, LaunchPlan, attitude_ok, plan_launch, pla
 from .placement import CameraModel, Placement, PlacementParams, plan_placements
 from .profile import LaunchConfiguration, ProfileParams, profile_analysis
 from .ranking import RankedAperture, rank_apertures
-from .silhouette import mav_contour, mav_silhouette
 from .volumetric import VolumetricMap, sensor_cloud
 
 __all__ = [

@@ -35,15 +35,15 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.api.capabilities import HasArmModel
+from marsupial.api.silhouette import mav_contour
 from marsupial.trees.skill import NodeParams, Skill
-from marsupial.world.capabilities import HasArmModel
 
 from ..uav_docking.team import phase_event
 from .detection import DepthFrame, DetectionParams, detect_apertures
 from .launch_pose import LaunchParams, plan_launches
 from .profile import ProfileParams, profile_analysis
 from .scan import APERTURES, VOLUMETRIC_MAP, fresh_frame
-from .silhouette import mav_contour
 from .volumetric import sensor_cloud
 
 LAUNCH_PLANS = "launch_plans"
@@ -71,7 +71,7 @@ class AnalyzeAperture(Skill["AnalyzeAperture.Params"]):
         """The eye-in-hand RGB-D camera."""
 
     robot_kinds = (HasArmModel,)
-    sensors = ("camera",)
+    sensors = ("{camera}",)
     claims = ("arm",)  # held still at the approach's viewing pose while the frames are taken
     reads = (f"{{robot}}/{APERTURES}", f"{{robot}}/{VOLUMETRIC_MAP}")
     writes = (f"{{robot}}/{LAUNCH_PLANS}",)

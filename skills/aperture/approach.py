@@ -63,9 +63,9 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.api.capabilities import HasArmModel, HasBase
 from marsupial.geometry import rotation_matrix
 from marsupial.trees.skill import NodeParams, Skill
-from marsupial.world.capabilities import HasArmModel, HasBase
 
 from ..uav_docking.team import phase_event
 from .base_drive import pursuit_step, turn_step
@@ -142,7 +142,7 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
         """The eye-in-hand RGB-D camera."""
 
     robot_kinds = (HasBase, HasArmModel)
-    sensors = ("camera",)
+    sensors = ("{camera}",)
     claims = ("base", "arm")
     reads = (f"{{robot}}/{APERTURES}", f"{{robot}}/{VOLUMETRIC_MAP}")
     writes = (f"{{robot}}/{PLACEMENT}",)

@@ -5,7 +5,7 @@ holster and for Phase I of the launch:
 
 - :class:`ArmCollisionModel` — python-fcl shapes of the arm's links, taken
   from the URDF's ``<collision>`` elements and posed by the pinocchio model
-  (:class:`~marsupial.world.kinematics.ArmKinematics`) at a joint vector,
+  (:class:`~marsupial.api.kinematics.ArmKinematics`) at a joint vector,
   plus shapes carried by the tool (the apparatus and the MAV, in the tcp
   frame). They are checked against the occupied voxels of the volumetric
   map M (one fcl box per occupied OctoMap leaf, a broad-phase AABB tree),
@@ -36,9 +36,8 @@ from ompl import base as ob
 from ompl import geometric as og
 from ompl import util as ou
 
-from marsupial.world.kinematics import ArmKinematics
-
-from .silhouette import _numbers
+from marsupial.api.kinematics import ArmKinematics
+from marsupial.api.silhouette import _numbers
 
 ou.setLogLevel(ou.LOG_WARN)  # OMPL reports every solve at INFO
 

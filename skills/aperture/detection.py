@@ -39,9 +39,8 @@ from typing import Any
 import cv2
 import numpy as np
 
+from marsupial.api.silhouette import MAV_URDF, mav_contour
 from marsupial.geometry import rotation_matrix
-
-from .silhouette import MAV_URDF, mav_contour
 
 CAMERA_LINK = "camera_link"  # link of the MMS's eye-in-hand camera (mms.urdf); its optical frame is R_link_optical
 

@@ -42,8 +42,8 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field, field_validator, model_validator
 
+from marsupial.api.capabilities import HasArmModel, HasBase
 from marsupial.trees.skill import Condition, NodeParams, Skill
-from marsupial.world.capabilities import HasArmModel, HasBase
 
 from ..navigation import Footprint
 from ..uav_docking.team import phase_event
@@ -163,7 +163,7 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
             return self
 
     robot_kinds = (HasBase, HasArmModel)
-    sensors = ("camera",)
+    sensors = ("{camera}",)
     claims = ("base", "arm")
     writes = (f"{{robot}}/{VOLUMETRIC_MAP}", f"{{robot}}/{EXPLORATION}")
 

@@ -50,9 +50,9 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.api.capabilities import HasArmModel, HasGripper, HasScoutLauncher
 from marsupial.geometry import rotation_matrix, transform
 from marsupial.trees.skill import NodeParams, Skill
-from marsupial.world.capabilities import HasArmModel, HasGripper, HasScoutLauncher
 
 from ..uav_docking.ik_engine import ClosedFormIK
 from ..uav_docking.team import phase_event

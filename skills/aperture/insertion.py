@@ -32,7 +32,7 @@ d_l, whose whole line is collision-free, and at least enough for the MAV to
 clear the wall's back face by ``clear_back``.
 
 Frames: poses are 4×4 transforms; ``nav`` is the navigation frame of the
-MMS's estimate, M the arm frame (:meth:`ArmModelOnboard.arm_base_pose`).
+MMS's estimate, M the arm frame (:meth:`~marsupial.api.views.ArmModelView.arm_base_pose`).
 Metres, radians.
 """
 
@@ -48,16 +48,16 @@ import fcl
 import numpy as np
 import shapely
 
+from marsupial.api.assets import asset_path
+from marsupial.api.kinematics import ArmKinematics
+from marsupial.api.silhouette import MAV_IN_CRADLE
 from marsupial.geometry import transform
-from marsupial.world.assets import asset_path
-from marsupial.world.kinematics import ArmKinematics
 
 from ..uav_docking.ik_engine import ClosedFormIK
 from ..uav_docking.relative_hold import CarrierFrame
 from ..uav_docking.selection import yaw_of_rotation
 from .arm_motion import ArmCollisionModel, urdf_shapes
 from .launch_pose import LaunchPlan
-from .silhouette import MAV_IN_CRADLE
 
 ARM_LINKS = (*(f"arm_link_{i}" for i in range(1, 7)), "gripper_base", "finger_left", "finger_right")
 """The MMS links that move with the arm (mms.urdf)."""

@@ -7,7 +7,7 @@ the MAV is ready to takeoff based on an appropriately timed command". Stages:
 
 1. *Phase III*: the turn ``insert_scout`` planned (about the MAV's body x);
 2. *launch*: once the arm has settled for ``settle`` s, the apparatus lets the
-   MAV go (:meth:`~marsupial.world.onboard.ManipulatorOnboard.release_scout`);
+   MAV go (:meth:`~marsupial.api.views.ManipulatorView.release_scout`);
    the MAV's own skill takes off (it senses that it is no longer held);
 3. *clear*: the MMS holds the arm still until the MAV's estimate, as the team
    link carries it, is ``clear_height`` above the cradle's seat as the MMS

@@ -345,7 +345,7 @@ def plan_placements(target: np.ndarray, normal: np.ndarray, occupancy: Volumetri
         target: t_a, the approach pose's position (nav, m): the point the camera looks at (m_A).
         normal: n̂, the model plane's normal toward the sensor (nav).
         occupancy: M.
-        kinematics: the arm's :class:`~marsupial.world.kinematics.ArmKinematics` (frame M → its links).
+        kinematics: the arm's :class:`~marsupial.api.kinematics.ArmKinematics` (frame M → its links).
         camera: the eye-in-hand camera on the arm.
         arm_mount: M in the ``base_footprint`` frame (position m, rotation).
         start: the present base pose ``(x, y, yaw)`` (nav, m, rad): its footprint counts as free space.

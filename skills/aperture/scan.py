@@ -31,8 +31,8 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.api.capabilities import HasArmModel
 from marsupial.trees.skill import NodeParams, Skill
-from marsupial.world.capabilities import HasArmModel
 
 from ..uav_docking.team import phase_event
 from .belief import ApertureBelief, BeliefParams, aperture_region
@@ -92,7 +92,7 @@ class ApertureScan(Skill["ApertureScan.Params"]):
         """The eye-in-hand RGB-D camera."""
 
     robot_kinds = (HasArmModel,)
-    sensors = ("camera",)
+    sensors = ("{camera}",)
     claims = ("arm",)
     writes = (f"{{robot}}/{APERTURES}", f"{{robot}}/{VOLUMETRIC_MAP}")
 

@@ -35,8 +35,8 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.api.capabilities import HasArmModel, Rotorcraft
 from marsupial.trees.skill import NodeParams, Skill
-from marsupial.world.capabilities import HasArmModel, Rotorcraft
 
 from ..uav_docking.team import phase_event
 from .insertion import held_mav_pose

@@ -18,8 +18,8 @@ from typing import ClassVar, Literal
 
 from pydantic import Field
 
+from marsupial.api.capabilities import Rotorcraft
 from marsupial.trees.skill import Condition, NodeParams, P
-from marsupial.world.capabilities import Rotorcraft
 
 from .tracking import TrackingModule
 

@@ -47,7 +47,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from marsupial.world.errors import UnknownNameError
+from marsupial.api.errors import UnknownNameError
 
 from .prediction import KalmanParams, PlatformPredictor
 

@@ -40,8 +40,8 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field, model_validator
 
+from marsupial.api.capabilities import HasBase, HasPlatform, Rotorcraft
 from marsupial.trees.skill import NodeParams, Skill, TeamMember
-from marsupial.world.capabilities import HasBase, HasPlatform, Rotorcraft
 
 from .touchdown import TouchdownParams, TouchdownTest
 from .tracking import GAIN_SCHEDULES, TrackerConfig, TrackingModule, tracking_module
@@ -104,16 +104,25 @@ class FlightSkill(Skill[PF]):
     reads = ("{robot}/tracking",)
     writes = ("{robot}/tracking",)
     robot_kinds = (Rotorcraft,)
-    sensors = ("bottom_camera", "sonar", "imu")
+    sensors = ("bottom_camera", "sonar", "imu", "battery")
     claims = ("rotors",)
 
     def start(self) -> None:
         self.module: TrackingModule = tracking_module(self, self.params.platform)
         self.module.configure(self.params.tracker_config())
+        self.motors_seen = False  # the flight controller has reported its motors running since the start
 
     def motors_stopped(self) -> bool:
-        """Whether the motors have stopped under the skill (an empty battery stops them); says so in the feedback."""
+        """Whether the motors have stopped under the skill (an empty battery stops them); says so in the feedback.
+
+        Motors the skill has just started count as running until the flight controller first reports them
+        (its arming state arrives with the next tick's readings).
+        """
         if self.robot.motors_on:
+            self.motors_seen = True
+            return False
+        if not self.motors_seen:
+            self.feedback_message = "starting the motors"
             return False
         battery = self.robot.battery()  # the battery monitor
         level = "unknown" if battery is None else f"{battery.soc_percent:.0f}%"

@@ -63,9 +63,9 @@ from typing import TYPE_CHECKING, Any, Generic, TypeVar, cast
 import cv2
 import numpy as np
 
+from marsupial.api.capabilities import HasPlatform
+from marsupial.api.errors import UnknownNameError
 from marsupial.geometry import heading_rotation, rotation_matrix, yaw_of
-from marsupial.world.capabilities import HasPlatform
-from marsupial.world.errors import UnknownNameError
 
 from .control import PIGains, PlatformTracker
 from .detection import DetectionParams, detect_platform, tilt_of

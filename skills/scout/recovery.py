@@ -26,8 +26,8 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.api.capabilities import Rotorcraft
 from marsupial.trees.skill import NodeParams, Skill
-from marsupial.world.capabilities import Rotorcraft
 
 from .skills import SCOUT_PATH
 

@@ -29,7 +29,7 @@ import cv2
 import numpy as np
 
 if TYPE_CHECKING:
-    from marsupial.world.team_link import LinkPort
+    from marsupial.api.views import LinkView
 
 VIDEO_TOPIC = "scout_video"
 """Team-link topic of the MAV's encoded frames (payload: :class:`VideoPacket`)."""
@@ -90,7 +90,7 @@ class VideoSender:
         stamp: sim time (s) of the newest frame sent (``-inf`` before the first).
     """
 
-    def __init__(self, link: LinkPort, quality: int, with_depth: bool):
+    def __init__(self, link: LinkView, quality: int, with_depth: bool):
         self.link = link
         self.quality = quality
         self.with_depth = with_depth
@@ -116,7 +116,7 @@ class VideoReceiver:
         lost: frames never decoded between the first and the newest received (link loss, or overtaken).
     """
 
-    def __init__(self, link: LinkPort, sender: str):
+    def __init__(self, link: LinkView, sender: str):
         self.link = link
         self.sender = sender
         self.received = 0

@@ -35,8 +35,8 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field, model_validator
 
+from marsupial.api.capabilities import Rotorcraft
 from marsupial.trees.skill import Condition, NodeParams, Skill, TeamMember
-from marsupial.world.capabilities import Rotorcraft
 
 from ..uav_docking.team import phase_event
 from .depth import DepthEstimator
@@ -152,7 +152,7 @@ class Scout(Skill["Scout.Params"]):
         self.detector: ObjectDetector = build(DETECTOR_GROUP, p.detector, ObjectDetector, p.detector_options)
         self.camera = self.robot.sensor("front_camera")
         self.sender = VideoSender(self.link, p.jpeg_quality, self.estimator.uses_rendered_depth)
-        self.carrier_link = self.context.link(p.carrier)
+        self.carrier_link = self.link_of(p.carrier)
         self.receiver = VideoReceiver(self.carrier_link, str(robot))
         self.started = self.now
         self.seen = 0

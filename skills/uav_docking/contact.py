@@ -74,8 +74,8 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.api.capabilities import Rotorcraft
 from marsupial.trees.skill import Condition, NodeParams, Skill
-from marsupial.world.capabilities import Rotorcraft
 
 from .gust_guard import GuardLimits, GustGuard
 from .pose import invert
@@ -159,6 +159,7 @@ class Contact(Skill["Contact.Params"]):
         """Cancellations after which the skill fails."""
 
     robot_kinds = (Rotorcraft,)
+    sensors = ("sonar", "{carrier}/eye_in_hand")
     claims = ("{carrier}/docking",)  # the UAV and the arm are track's, which runs beside it
     reads = (f"{{carrier}}/{TRACKING}",)
     writes = (f"{{carrier}}/{CONTACT_TARGET}", f"{{carrier}}/{DOCKING_FLAG}", f"{{carrier}}/{PART_B_YAW}")

@@ -54,7 +54,7 @@ from typing import Any
 
 import numpy as np
 
-from marsupial.world.kinematics import ArmKinematics
+from marsupial.api.kinematics import ArmKinematics
 
 from .cord import Cord, CordParams, CordPlanner
 from .graph import Graph, GraphParams, build_graph

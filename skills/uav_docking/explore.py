@@ -73,10 +73,10 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.api.capabilities import HasBase, Rotorcraft
+from marsupial.api.errors import UnknownNameError
 from marsupial.sensing import EstimateHistory, in_nav_frame, sensor_mount
 from marsupial.trees.skill import NodeParams, Skill, TeamMember
-from marsupial.world.capabilities import HasBase, Rotorcraft
-from marsupial.world.errors import UnknownNameError
 
 from .coverage import (
     FlightMap,

@@ -49,8 +49,8 @@ from typing import Literal
 import numpy as np
 import pinocchio as pin
 
-from marsupial.world.errors import UnknownNameError
-from marsupial.world.kinematics import ArmKinematics
+from marsupial.api.errors import UnknownNameError
+from marsupial.api.kinematics import ArmKinematics
 
 TWO_PI = 2.0 * math.pi
 _AXIS_Z = np.array([0.0, 0.0, 1.0])

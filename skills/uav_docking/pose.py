@@ -20,9 +20,9 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from marsupial.api.kinematics import ArmKinematics
+from marsupial.api.tags import TAG_CELLS, TagBundle, load_tag_bundle
 from marsupial.geometry import Vector
-from marsupial.world.apriltag_bundle import TAG_CELLS, TagBundle, load_tag_bundle
-from marsupial.world.kinematics import ArmKinematics
 
 FLANGE_LINK = "end_effector"  # end-effector frame F of F(q): the joint-6 flange (mobile_manipulator.urdf)
 CAMERA_LINK = "eye_in_hand"  # optical frame C_A of the eye-in-hand camera (mobile_manipulator.urdf)
@@ -161,7 +161,9 @@ class BundleDetector:
         self.edge_refinement = edge_refinement
         params = cv2.aruco.DetectorParameters()
         params.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_SUBPIX
-        self._detector = cv2.aruco.ArucoDetector(self.bundle.aruco_dictionary(), params)
+        self._detector = cv2.aruco.ArucoDetector(
+            cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, self.bundle.aruco_dictionary)), params
+        )
         self._ids = np.array(self.bundle.ids)
 
     def detect(self, image: np.ndarray) -> BundleDetection:

@@ -33,10 +33,10 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.api.capabilities import Rotorcraft
+from marsupial.api.readings import StateEstimate
 from marsupial.geometry import rot_z, rotation_matrix, transform
 from marsupial.trees.skill import NodeParams, Skill
-from marsupial.world.capabilities import Rotorcraft
-from marsupial.world.onboard import StateEstimate
 
 from .observer import EyeInHandObserver
 from .relative_pose import RelativePose, RelativeState
@@ -204,7 +204,7 @@ def relative_pose_of(
     """
     observer = EyeInHandObserver.of(skill.context, carrier) if fuse else None
     uav = str(skill.robot_name)  # a UAV skill always has its robot
-    return RelativePose(carrier, skill.context.link(carrier.name), uav, observer, gain, gate, since, vision_fixes)
+    return RelativePose(carrier, skill.link_of(carrier.name), uav, observer, gain, gate, since, vision_fixes)
 
 
 class RelativeHold(Skill["RelativeHold.Params"]):
@@ -232,6 +232,7 @@ class RelativeHold(Skill["RelativeHold.Params"]):
         """Succeed after holding this long (simulated s); none: hold until stopped."""
 
     robot_kinds = (Rotorcraft,)
+    sensors = ("{carrier}/eye_in_hand",)
     claims = ("rotors",)
     writes = ("{robot}/hold_error",)
 

@@ -32,7 +32,7 @@ it by a gain; a measurement too far from the prediction is an outlier. Only
 the drift since the last frame adds to the error while the marker is hidden.
 
 External vision fix (``vision_fixes=True``, the ``track`` default): each frame
-accepted by the filter is also sent to the UAV over the team link (:class:`~marsupial.world.onboard.VisionFix` on
+accepted by the filter is also sent to the UAV over the team link (:class:`~marsupial.api.readings.VisionFix` on
 ``<uav>/vision_fix``): the UAV base's pose in the frame of the carrier's
 estimate, ``T_map_M(t_k) · P_Q^M(t_k)``, the camera's measurement composed
 with the carrier's own estimate at the frame's stamp ``t_k`` (not the fused
@@ -57,9 +57,9 @@ from typing import Any
 
 import numpy as np
 
+from marsupial.api.readings import VisionFix, vision_fix_topic
 from marsupial.geometry import quaternion_from_matrix, rot_z, rotation_matrix, transform
 from marsupial.sensing import EstimateHistory
-from marsupial.world.onboard import VisionFix, vision_fix_topic
 
 from .selection import yaw_of_rotation
 

@@ -33,8 +33,8 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.api.capabilities import Rotorcraft
 from marsupial.trees.skill import NodeParams, Skill
-from marsupial.world.capabilities import Rotorcraft
 
 from .observer import EyeInHandObserver, position_spread
 from .relative_hold import CarrierFrame, HoldGains, command_hold, relative_pose_of, target_above_part_a
@@ -86,6 +86,7 @@ class Rendezvous(Skill["Rendezvous.Params"]):
         """Largest joint error (rad) at which the arm has reached ``arm_pose``."""
 
     robot_kinds = (Rotorcraft,)
+    sensors = ("{carrier}/eye_in_hand",)
     claims = ("rotors", "{carrier}/arm")
     writes = (f"{{carrier}}/{DOCKING_FLAG}", f"{{carrier}}/{UAV_POSE}")
 

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from marsupial.world.apriltag_bundle import load_tag_bundle
+from marsupial.api.tags import load_tag_bundle
 
 from .graph import Graph
 

@@ -32,8 +32,8 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.api.capabilities import Carrier, Rotorcraft
 from marsupial.trees.skill import NodeParams, Skill, TeamMember
-from marsupial.world.capabilities import Carrier, Rotorcraft
 
 from .pose import invert
 from .relative_hold import PART_A_LINK, CarrierFrame, HoldGains, command_hold, part_b_transform, relative_pose_of
@@ -107,6 +107,7 @@ class Deploy(Skill["Deploy.Params"]):
         """Largest joint error (rad) at which the arm has arrived."""
 
     robot_kinds = (Rotorcraft,)
+    sensors = ("{carrier}/eye_in_hand",)
     claims = ("rotors", "{carrier}/arm", "{carrier}/docking")
     reads = (f"{{carrier}}/{PART_B_YAW}",)
     writes = (f"{{carrier}}/{DOCKING_FLAG}", f"{{carrier}}/{UAV_STORED}", f"{{carrier}}/{PART_B_YAW}")

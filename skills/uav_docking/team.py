@@ -28,10 +28,10 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Annotated, Any
 
-from marsupial.trees.arbitration import CommandPort
+from marsupial.api.capabilities import Carrier
+from marsupial.api.errors import UnknownNameError
+from marsupial.api.views import CarrierView
 from marsupial.trees.skill import TeamMember
-from marsupial.world.capabilities import Carrier
-from marsupial.world.errors import UnknownNameError
 
 if TYPE_CHECKING:
     from marsupial.trees.skill import MissionNode
@@ -45,10 +45,10 @@ UAV_STORED = "uav_stored"
 PART_B_YAW = "part_b_yaw"
 
 
-def carrier_port(skill: MissionNode[Any], name: str) -> CommandPort:
+def carrier_port(skill: MissionNode[Any], name: str) -> CarrierView:
     """The onboard interface of team member ``name`` as ``skill`` commands it (through the run's arbiter).
 
-    It must be a :class:`~marsupial.world.capabilities.Carrier`: an arm with
+    It must be a :class:`~marsupial.api.capabilities.Carrier`: an arm with
     its kinematics and a docking device (the ``mobile_manipulator``). Raises :class:`UnknownNameError` naming the
     team's carriers when ``name`` is not one of them.
     """

@@ -60,8 +60,8 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.api.capabilities import Rotorcraft
 from marsupial.trees.skill import NodeParams, Skill
-from marsupial.world.capabilities import Rotorcraft
 
 from .engine import MotionEngine, MotionEngineParams
 from .pose import invert
@@ -219,6 +219,7 @@ class Track(Skill["Track.Params"]):
         """Planning-and-optimisation rate f_B (Hz), §IV-A; merge and selection run at f_O = 2·f_B."""
 
     robot_kinds = (Rotorcraft,)
+    sensors = ("sonar", "{carrier}/eye_in_hand", "{carrier}/lidar")
     claims = ("rotors", "{carrier}/arm")
     writes = (f"{{carrier}}/{TRACKING}", f"{{carrier}}/{DOCKING_FLAG}")
 

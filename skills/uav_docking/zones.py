@@ -33,8 +33,8 @@ import fcl
 import numpy as np
 import pinocchio as pin
 
-from marsupial.world.assets import asset_path
-from marsupial.world.kinematics import ArmKinematics
+from marsupial.api.assets import asset_path
+from marsupial.api.kinematics import ArmKinematics
 
 from .cord import Cord
 from .ik_engine import ArmGeometry

@@ -5,7 +5,7 @@ right, v down; the child's ground frame {R}; metres and radians):
 
 - :mod:`.features` — the benchmark's features (u_h, v_h, k_h, s_u, N_G) in one
   frame of the child's camera (§3.1, eq. 5), from the ``rgb`` of the
-  :class:`~marsupial.world.onboard.CameraImage` its ``camera`` port delivers;
+  :class:`~marsupial.api.readings.CameraImage` its ``camera`` port delivers;
 - :mod:`.geometry` — the imaging of H_GS (eqs. 1, 3, 4) and its theoretical slope k̄_h (eq. 6);
 - :mod:`.criterion` — C2 on the recorded criterion list f_list (Remark 2,
   ``data/<robot>_f_list.yaml``) and C3 (Remark 3, eq. 7);

@@ -29,8 +29,8 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.api.capabilities import HasBase, HasLift
 from marsupial.trees.skill import NodeParams, P, Skill, TeamMember
-from marsupial.world.capabilities import HasBase, HasLift
 
 from .conditions import LOST_FRAMES
 from .criterion import load_criterion_list, robot_tolerances

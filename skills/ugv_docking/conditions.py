@@ -24,8 +24,8 @@ from typing import Annotated, Any, ClassVar
 
 from pydantic import Field
 
+from marsupial.api.capabilities import HasBase
 from marsupial.trees.skill import Condition, NodeParams, P, TeamMember
-from marsupial.world.capabilities import HasBase
 
 from .criterion import CriterionList, load_criterion_list, matched, robot_tolerances, within_criterion
 from .features import BenchmarkFeatures
@@ -42,6 +42,11 @@ class _FeatureCondition(Condition[P]):
     robot_kinds = (HasBase,)
     reads = (f"{{robot}}/{VIEW_KEY}",)
     writes = (f"{{robot}}/{VIEW_KEY}",)
+
+    @classmethod
+    def sensors_read(cls, params: P, robot: str | None) -> tuple[tuple[str, str], ...]:
+        """Its robot's ``camera`` when it judges its own frames (no ``child`` named), else nothing."""
+        return ((str(robot), "camera"),) if getattr(params, "child", None) is None and robot is not None else ()
 
     def __init__(self, *args: Any, **kwargs: Any):
         super().__init__(*args, **kwargs)

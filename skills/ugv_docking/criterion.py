@@ -13,7 +13,7 @@
   straight in: ``|k_h| < Δk``, ``|u_h - W/2| < Δu``, ``s_u ≥ s_u^e``.
 
 f_list is measured once per robot model, with the robot placed around the
-benchmark (``python -m marsupial.world.ugv_criterion`` records the
+benchmark (``python -m marsupial.tools.ugv_criterion`` records the
 ``child_ugv``'s into ``data/child_ugv_f_list.yaml``, shipped with this
 package); :func:`load_criterion_list` reads it. Features as in
 :mod:`.features` (pixels, u right, v down).

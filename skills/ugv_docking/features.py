@@ -24,7 +24,7 @@ components), no per-pixel Python loop:
 Frames: image pixels, u right (column), v down (row), origin at the top-left
 pixel's centre; k_h = dv/du (so a border rising to the right is negative, as in
 Remark 1). Units: pixels, k_h dimensionless. The input is the ``rgb`` array of the
-:class:`~marsupial.world.onboard.CameraImage` that the child's ``camera`` port
+:class:`~marsupial.api.readings.CameraImage` that the child's ``camera`` port
 delivers (``robot.sensor("camera").read().data.rgb``).
 """
 

@@ -26,8 +26,8 @@ from typing import Annotated
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.api.capabilities import HasBase, HasLift
 from marsupial.trees.skill import NodeParams, P, Skill, TeamMember
-from marsupial.world.capabilities import HasBase, HasLift
 
 from .steering import align_rate
 from .vision import received_features, report_platform

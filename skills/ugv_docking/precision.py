@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from marsupial.world.robots.ugv_docking import CAMERA_FOV_V_DEG, CAMERA_RESOLUTION, ENTRANCE_WIDTH_M
+from marsupial.api.model import CAMERA_FOV_V_DEG, CAMERA_RESOLUTION, ENTRANCE_WIDTH_M
 
 from .features import T_N
 

@@ -19,8 +19,8 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.api.capabilities import HasBase, HasLift
 from marsupial.trees.skill import NodeParams, Skill
-from marsupial.world.capabilities import HasBase, HasLift
 
 from ..generic import DriveTo
 from .mother import ChildMember
@@ -30,7 +30,7 @@ LIFT_TOLERANCE = 0.005  # m: the lift encoder this close to its target counts as
 
 
 class Lift(Skill["Lift.Params"]):
-    """Raise the platform with the child on it to the storing capsule."""
+    """Raise the platform with the child on it to the storing capsule; it decides on the platform's load switch."""
 
     class Params(NodeParams):
         tolerance: float = Field(LIFT_TOLERANCE, gt=0.0)
@@ -40,15 +40,17 @@ class Lift(Skill["Lift.Params"]):
     claims = ("lift",)
 
     def start(self) -> None:
-        self.lifted = self.robot.raise_platform()
+        self.loaded = bool(self.robot.platform_occupied)  # the load switch: a child stands wholly on the plate
+        if self.loaded:
+            self.robot.raise_platform()
 
     def step(self) -> Status:
         report_platform(self)
-        if not self.lifted:
-            self.feedback_message = "nothing on the platform to lift"
+        if not self.loaded:
+            self.feedback_message = "nothing on the platform to lift (load switch open)"
             return Status.FAILURE
         height, travel = float(self.robot.platform_height()), float(self.robot.lift_travel)
-        self.feedback_message = f"lifting {', '.join(self.lifted)}: {height:.3f} of {travel:.2f} m"
+        self.feedback_message = f"lifting the child: {height:.3f} of {travel:.2f} m"
         return Status.SUCCESS if height >= travel - self.params.tolerance else Status.RUNNING
 
 

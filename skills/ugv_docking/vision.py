@@ -25,9 +25,8 @@ from typing import TYPE_CHECKING, Any
 from .features import BenchmarkFeatures, FeatureParams, extract_features
 
 if TYPE_CHECKING:
+    from marsupial.api.views import LinkView, SensorView
     from marsupial.trees.skill import MissionNode
-    from marsupial.world.onboard import SensorPort
-    from marsupial.world.team_link import LinkPort
 
 FEATURES_TOPIC = "benchmark_features"
 """Team-link topic of the child's features (payload: :class:`~.features.BenchmarkFeatures`)."""
@@ -67,8 +66,8 @@ class BenchmarkView:
 
     def __init__(
         self,
-        camera: SensorPort,
-        link: LinkPort,
+        camera: SensorView,
+        link: LinkView,
         params: FeatureParams | None = None,
         on_features: Callable[[BenchmarkFeatures], None] | None = None,
     ):

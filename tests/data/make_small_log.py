@@ -22,6 +22,7 @@ import py_trees
 import pybullet
 from py_trees.common import Status
 
+from marsupial.trees.btxml import TreeTracker
 from marsupial.trees.recorder import Recorder
 from marsupial.trees.replay import format_timeline, read_log
 from marsupial.world import World
@@ -69,13 +70,15 @@ def make_small_log(path: Path) -> None:
         _add_objects(world)
         rec.log_scene(world)
         rec.log_event(0.0, "run_start", mission="small_run", seed=7)
-        root = _tree()
+        root, tracker = _tree(), TreeTracker()
         image = np.zeros((6, 8, 3), dtype=np.uint8)
         image[:, :4] = (255, 0, 0)
         for tick in range(10):
             t = round(tick * TICK_S, 9)
             root.tick_once()
-            rec.log_tree(t, root)
+            status = tracker.status(root)
+            if status is not None:
+                rec.log_tree(t, status)
             rec.log_robot_poses(
                 t,
                 {

@@ -2,13 +2,15 @@
 
 Estimators live on the world side (their robot feeds them its sensors) and
 are read by skills only through the onboard interface
-(:mod:`marsupial.world.onboard`). :mod:`.base` has the estimate type,
+(:mod:`marsupial.api.views`). :mod:`.base` has the estimate type,
 :mod:`.flight` the quadrotors' IMU + optical-flow + sonar + barometer
 estimator, :mod:`.external` the external vision fixes it fuses (a team
 member's camera measuring the UAV, over the team link), :mod:`.ground`
 wheel odometry and map localisation.
 """
 
-from .base import Estimator, StateEstimate
+from marsupial.api.readings import StateEstimate
+
+from .base import Estimator
 
 __all__ = ["Estimator", "StateEstimate"]

@@ -11,67 +11,9 @@ the navigation frame, angular velocity rad/s in the body frame, quaternions
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
-
 import numpy as np
 
-from marsupial.geometry import rotation_matrix, yaw_of
-
-
-@dataclass(frozen=True)
-class StateEstimate:
-    """One onboard estimate of a robot's base (ground robots: its ``base_footprint``).
-
-    Attributes:
-        stamp: simulated time (s) of the estimate.
-        frame: navigation frame (``"odom"`` or ``"map"``).
-        position: position (m) in ``frame``.
-        orientation: ``[x, y, z, w]`` quaternion of the body in ``frame``.
-        velocity: linear velocity (m/s) in ``frame``.
-        angular_velocity: body rates (rad/s, body frame).
-        source: what produced it (e.g. ``"imu+flow+sonar+baro"``, ``"wheel_odometry"``, ``"map_localization"``).
-        frame_shift: corrections by which external fixes have moved ``frame`` under the body so far,
-            ``(x, y, z (m), yaw (rad))``, cumulated (PX4 publishes its estimator's resets likewise); a consumer
-            that propagates with the estimate subtracts their change to get a smooth trajectory.
-    """
-
-    stamp: float
-    frame: str
-    position: np.ndarray
-    orientation: np.ndarray
-    velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    angular_velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    source: str = ""
-    frame_shift: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
-
-    @property
-    def yaw(self) -> float:
-        """Heading (rad) about the frame's z axis."""
-        return yaw_of(self.orientation)
-
-    @property
-    def rotation(self) -> np.ndarray:
-        """``R_frame_body`` (3×3)."""
-        return rotation_matrix(self.orientation)
-
-    @property
-    def speed(self) -> float:
-        """Horizontal speed (m/s)."""
-        return math.hypot(float(self.velocity[0]), float(self.velocity[1]))
-
-    def to_dict(self) -> dict[str, object]:
-        """JSON-ready form (for logs and the team link)."""
-        return {
-            "stamp": self.stamp,
-            "frame": self.frame,
-            "position": [float(v) for v in self.position],
-            "orientation": [float(v) for v in self.orientation],
-            "velocity": [float(v) for v in self.velocity],
-            "angular_velocity": [float(v) for v in self.angular_velocity],
-            "source": self.source,
-            "frame_shift": [float(v) for v in self.frame_shift],
-        }
+from marsupial.api.readings import StateEstimate
 
 
 class Estimator:

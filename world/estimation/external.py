@@ -78,29 +78,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-VISION_FIX = "vision_fix"
-
-
-def vision_fix_topic(uav: str) -> str:
-    """Team-link topic of the vision fixes of ``uav`` (``"<uav>/vision_fix"``)."""
-    return f"{uav}/{VISION_FIX}"
-
-
-@dataclass(frozen=True)
-class VisionFix:
-    """One external measurement of a UAV's base pose, as its observer sends it over the team link.
-
-    Attributes:
-        stamp: time (s, simulated) the measurement was taken (the camera frame's stamp).
-        position: UAV base position (m) in the sender's navigation frame N.
-        yaw: UAV heading (rad) about N's z axis.
-        source: what measured it (e.g. ``"carrier/eye_in_hand"``).
-    """
-
-    stamp: float
-    position: tuple[float, float, float]
-    yaw: float
-    source: str = ""
+from marsupial.api.readings import VisionFix
 
 
 @dataclass(frozen=True)
@@ -138,7 +116,7 @@ class VisionFixFusion:
 
     Args:
         source: returns the newest vision-fix message delivered to the UAV (a
-            :class:`~marsupial.world.team_link.Message` whose payload is a
+            :class:`~marsupial.api.readings.LinkMessage` whose payload is a
             :class:`VisionFix`), or ``None``.
         gains: :class:`VisionFixGains`.
 

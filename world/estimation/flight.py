@@ -51,9 +51,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from marsupial.api.readings import StateEstimate
+
 from ..sensors.imu import quat_multiply, quat_yaw, rotation_rows
 from ..world import GRAVITY
-from .base import Estimator, StateEstimate
+from .base import Estimator
 from .external import VisionFixFusion, VisionFixGains
 
 if TYPE_CHECKING:

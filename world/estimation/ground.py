@@ -33,9 +33,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from marsupial.api.readings import StateEstimate
 from marsupial.geometry import yaw_of
 
-from .base import Estimator, StateEstimate
+from .base import Estimator
 
 if TYPE_CHECKING:
     from ..robots.wheeled import WheeledRobot

@@ -5,7 +5,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, cast
 
-from ..errors import UnknownNameError
+from marsupial.api.errors import UnknownNameError
 
 if TYPE_CHECKING:
     from .base import Robot

@@ -47,33 +47,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
+from marsupial.api.model import FlightLimits
+
 from ..world import GRAVITY
 
 FRAMES = ("body", "world")
 VERTICAL_REFERENCE_TAU = 0.1  # s, smoothing of the vertical velocity reference
-
-
-@dataclass(frozen=True)
-class FlightLimits:
-    """What the autopilot allows (vendor SDK settings).
-
-    Attributes:
-        max_speed_xy: horizontal speed limit (m/s).
-        max_speed_z: vertical speed limit (m/s).
-        max_yaw_rate: yaw rate limit (rad/s).
-        max_tilt: roll/pitch limit (rad).
-        accel_ref: horizontal acceleration of the velocity reference (m/s²).
-        accel_ref_z: vertical acceleration of the velocity reference (m/s²).
-        thrust_to_weight: maximum thrust over weight.
-    """
-
-    max_speed_xy: float
-    max_speed_z: float
-    max_yaw_rate: float
-    max_tilt: float
-    accel_ref: float
-    accel_ref_z: float = 2.0
-    thrust_to_weight: float = 2.0
 
 
 @dataclass(frozen=True)

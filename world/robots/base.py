@@ -13,11 +13,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet
 
+from marsupial.api.assets import asset_path
+from marsupial.api.errors import UnknownNameError
+from marsupial.api.views import RobotView
 from marsupial.geometry import Vector, yaw_of  # (yaw_of is also re-exported for the robot modules)
-
-from ..assets import asset_path
-from ..errors import UnknownNameError
-from ..onboard import Onboard, base_frame_offset
 
 if TYPE_CHECKING:
     from ..estimation.base import Estimator
@@ -48,6 +47,13 @@ def rotation_matrix(quaternion: Vector) -> np.ndarray:
     return np.array(pybullet.getMatrixFromQuaternion(quaternion)).reshape(3, 3)
 
 
+def base_frame_offset(p_base: np.ndarray, q_base: np.ndarray, p_link: np.ndarray,
+                      q_link: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Position (m) and rotation of a link in its base frame, from the two world poses (model set-up only)."""
+    R_base = rotation_matrix(q_base)
+    return R_base.T @ (np.asarray(p_link) - np.asarray(p_base)), R_base.T @ rotation_matrix(q_link)
+
+
 class Robot:
     """Base of every robot: owns one pybullet body (or more) and its sensors.
 
@@ -59,12 +65,10 @@ class Robot:
 
     #: registry name of the kind, e.g. ``"bebop2"``
     kind: str = ""
-    #: the class of its onboard interface (what skills get, :mod:`marsupial.world.onboard`)
-    onboard_class: type[Onboard] = Onboard
+    #: the view of it that nodes hold (:mod:`marsupial.api.views`): its kind's readings and commands
+    view_class: type[RobotView] = RobotView
     #: the onboard state estimator (set by each kind's constructor, :mod:`marsupial.world.estimation`)
     estimator: Estimator
-    #: its onboard interface once built (:func:`~marsupial.world.onboard.onboard_of`)
-    _onboard: Onboard | None = None
 
     def __init__(self, world: World, name: str):
         self.world = world

@@ -22,44 +22,16 @@ commanded circle comes out wider: Palafox et al. saw the Summit XL drive a
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import pybullet
+
+from marsupial.api.model import DiffDriveLimits
 
 if TYPE_CHECKING:
     import numpy as np
 
     from ..world import World
-
-
-@dataclass(frozen=True)
-class DiffDriveLimits:
-    """Motion limits and slip of a base (SI units).
-
-    Attributes:
-        max_speed: |v| limit (m/s).
-        max_omega: |omega| limit (rad/s).
-        max_accel: |dv/dt| limit (m/s²).
-        max_alpha: |domega/dt| limit (rad/s²).
-        slip: fraction of the commanded speed lost to wheel slip (0 = none).
-        drift_per_rad: lateral drift speed per (m/s · rad/s) while turning (m/s).
-        noise_std: standard deviation of the seeded speed noise (m/s, and rad/s on omega).
-        max_force: force (N) the drive constraint may exert; walls stronger than it stop the base.
-        resync_m: distance (m) between body and reference beyond which the reference resyncs.
-        turn_slip: fraction of the commanded yaw rate lost to wheel scrub (0 = none).
-    """
-
-    max_speed: float
-    max_omega: float
-    max_accel: float = 1.0
-    max_alpha: float = 2.0
-    slip: float = 0.0
-    drift_per_rad: float = 0.0
-    noise_std: float = 0.0
-    max_force: float = 5000.0
-    resync_m: float = 0.05
-    turn_slip: float = 0.0
 
 
 def _yaw(q: tuple[float, ...]) -> float:

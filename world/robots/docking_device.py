@@ -41,7 +41,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet
 
-from ..onboard import simulates_hardware
 from .attachment import place_link_at, set_collisions, weld
 from .base import rotation_matrix
 
@@ -166,8 +165,6 @@ class DockingDevice:
         """True when ``uav``'s Part B rests on Part A: the faces within ``contact_distance`` along Part A's axis,
         Part B's centre and axis within the lateral and tilt tolerances the conical structure centres (§IV-C)."""
         return abs(self.offset_to(uav)[0]) <= self.contact_distance and self.aligned(uav)
-
-    @simulates_hardware
     def contact_switch(self) -> bool:
         """The limit switch under Part A's face: closed while some UAV's Part B rests seated on it (device state)."""
         return self._uav_in_contact() is not None
@@ -188,8 +185,6 @@ class DockingDevice:
     def magnet_off(self) -> None:
         """De-energise the electromagnet (a locked UAV stays held by the levers)."""
         self.magnet = False
-
-    @simulates_hardware
     def lock(self) -> bool:
         """Start closing the levers on the UAV in contact with Part A.
 
@@ -208,8 +203,6 @@ class DockingDevice:
         self._locking = uav
         self._lock_due_step = self.world.clock.steps + self.world.clock.steps_for(self.lock_time)
         return True
-
-    @simulates_hardware
     def release(self) -> None:
         """Open the levers and switch the magnet off; a docked UAV is freed (``on_released()``)."""
         self.magnet = False

@@ -56,19 +56,19 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet
 
+from marsupial.api.assets import asset_path
+from marsupial.api.errors import UnknownNameError
+from marsupial.api.kinematics import ArmKinematics
+from marsupial.api.model import DiffDriveLimits, Intrinsics
+from marsupial.api.views import ManipulatorView
 from marsupial.geometry import Vector, quaternion_from_matrix, rotation_matrix, transform
 
-from ..assets import asset_path
-from ..errors import UnknownNameError
 from ..estimation.ground import SKID_STEER_ODOMETRY
-from ..kinematics import ArmKinematics
-from ..onboard import ManipulatorOnboard, simulates_hardware
 from ..sensors.base import SensorConfig
-from ..sensors.camera import OPTICAL_FORWARD, Camera, Intrinsics
+from ..sensors.camera import OPTICAL_FORWARD, Camera
 from .arm import ArmController
 from .attachment import set_collisions, weld
 from .base import Robot, yaw_of
-from .diff_drive import DiffDriveLimits
 from .encoders import JointEncoders
 from .wheeled import WheeledRobot
 
@@ -307,7 +307,7 @@ class MMS(WheeledRobot):
     """
 
     kind = "mms"
-    onboard_class = ManipulatorOnboard
+    view_class = ManipulatorView
     urdf = "mms.urdf"
     default_limits = MMS_LIMITS
 
@@ -383,8 +383,6 @@ class MMS(WheeledRobot):
     def set_joint_targets(self, q: Vector) -> None:
         """Move the arm toward joint angles ``q`` (6 values, rad; clipped into the joint limits)."""
         self.arm.set_targets(q)
-
-    @simulates_hardware
     def hold_arm(self) -> None:
         """Hold the arm joints where they are now (the joint controllers latch their own positions)."""
         self.arm.hold()
@@ -392,8 +390,6 @@ class MMS(WheeledRobot):
     def arm_positions(self) -> np.ndarray:
         """Arm joint angles now (rad), ``arm_joint_1`` … ``arm_joint_6``."""
         return self.arm.positions()
-
-    @simulates_hardware
     def arm_encoders(self) -> np.ndarray:
         """Arm joint angles as the joint encoders read them (rad; 12-bit encoders, :mod:`.encoders`)."""
         return self.encoders.read(self.arm.positions())
@@ -421,8 +417,6 @@ class MMS(WheeledRobot):
         """
         self._closing = True
         self._command_fingers(0.0)
-
-    @simulates_hardware
     def gripper_opening(self) -> float:
         """Gap between the finger pads (m)."""
         states = pybullet.getJointStates(self.body_id, self.fingers, physicsClientId=self.cid)
@@ -477,8 +471,6 @@ class MMS(WheeledRobot):
         T_rel[1, 3] = 0.0  # centred between the fingers
         T_new = T_tcp @ T_rel
         return T_new[:3, 3], quaternion_from_matrix(T_new[:3, :3])
-
-    @simulates_hardware
     def release(self) -> LaunchingApparatus | None:
         """Let go of the held apparatus and open the fingers; returns what was held.
 
@@ -513,8 +505,6 @@ class MMS(WheeledRobot):
     def apparatuses(self) -> list[LaunchingApparatus]:
         """The launching apparatuses the MMS was loaded with, left then right."""
         return [h.apparatus for h in self.holsters.values()]
-
-    @simulates_hardware
     def release_scout(self) -> bool:
         """Open the held apparatus's hold on its MAV (the launch command, §IV-F); whether a MAV was let go."""
         if self.held is None or not self.held.mav_secured:

@@ -35,16 +35,16 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet
 
+from marsupial.api.errors import UnknownNameError
+from marsupial.api.kinematics import ArmKinematics
+from marsupial.api.model import DiffDriveLimits, Intrinsics, LidarSpec
+from marsupial.api.views import CarrierView
 from marsupial.geometry import Vector
 
-from ..errors import UnknownNameError
-from ..kinematics import ArmKinematics
-from ..onboard import CarrierOnboard, simulates_hardware
 from ..sensors.base import SensorConfig
-from ..sensors.camera import Camera, Intrinsics
-from ..sensors.lidar import Lidar, LidarSpec
+from ..sensors.camera import Camera
+from ..sensors.lidar import Lidar
 from .arm import RPM, ArmController
-from .diff_drive import DiffDriveLimits
 from .docking_device import DockingDevice
 from .encoders import JointEncoders
 from .wheeled import WheeledRobot
@@ -172,7 +172,9 @@ class MobileManipulator(WheeledRobot):
     """
 
     kind = "mobile_manipulator"
-    onboard_class = CarrierOnboard
+    view_class = CarrierView
+    #: the named arm poses its computer knows (rad)
+    arm_poses: Mapping[str, tuple[float, ...]] = ARM_POSES
 
     @classmethod
     def declared_sensors(cls) -> frozenset[str] | None:
@@ -269,8 +271,6 @@ class MobileManipulator(WheeledRobot):
     def set_joint_targets(self, q: str | Vector) -> None:
         """Move the arm toward ``q`` (6 angles in rad, or a name of :data:`ARM_POSES`), clipped to the limits."""
         self.arm.set_targets(self._configuration(q))
-
-    @simulates_hardware
     def hold_arm(self) -> None:
         """Hold every arm joint where it is now."""
         self.arm.hold()
@@ -282,8 +282,6 @@ class MobileManipulator(WheeledRobot):
     def joint_positions(self) -> np.ndarray:
         """Arm joint angles now (rad)."""
         return self.arm.positions()
-
-    @simulates_hardware
     def arm_encoders(self) -> np.ndarray:
         """Arm joint angles as the joint encoders read them (rad; Dynamixel 12-bit, :mod:`.encoders`)."""
         return self.encoders.read(self.arm.positions())

@@ -59,19 +59,21 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 import pybullet
 
+from marsupial.api.errors import UnknownNameError
+from marsupial.api.model import FlightLimits, Intrinsics
+from marsupial.api.readings import vision_fix_topic
+from marsupial.api.views import QuadrotorView
+
 from ..energy import Battery, BatteryGauge, BatterySpec, RotorPowerModel, hover_endurance_s
-from ..errors import UnknownNameError
-from ..estimation.external import vision_fix_topic
 from ..estimation.flight import FlightEstimator
-from ..onboard import QuadrotorOnboard, simulates_hardware
 from ..sensors.barometer import Barometer
 from ..sensors.base import SensorConfig
-from ..sensors.camera import OPTICAL_DOWN, OPTICAL_FORWARD, Camera, Intrinsics
+from ..sensors.camera import OPTICAL_DOWN, OPTICAL_FORWARD, Camera
 from ..sensors.flow import OpticalFlow
 from ..sensors.imu import Imu, ImuErrors, Quat, Vec3
 from ..sensors.sonar import Sonar
 from ..world import GRAVITY
-from .autopilot import FRAMES, Autopilot, AutopilotGains, Drag, FlightLimits
+from .autopilot import FRAMES, Autopilot, AutopilotGains, Drag
 from .base import Robot, pose_from_list, rotation_matrix, yaw_of
 
 __all__ = [
@@ -285,7 +287,7 @@ class Quadrotor(Robot):
     """
 
     spec: QuadrotorSpec
-    onboard_class = QuadrotorOnboard
+    view_class = QuadrotorView
     estimator: FlightEstimator
 
     @classmethod
@@ -405,8 +407,6 @@ class Quadrotor(Robot):
     def hover(self) -> None:
         """Stop (at the reference acceleration) and hold the estimated position where the reference stops."""
         self.autopilot.hover()
-
-    @simulates_hardware
     def set_motors(self, on: bool) -> None:
         """Start or stop the motors. Starting holds the estimated pose; stopped motors give no thrust and draw nothing.
 

@@ -29,9 +29,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet
 
+from marsupial.api.model import DiffDriveLimits
+from marsupial.api.views import PlatformView
+
 from ..estimation.ground import SKID_STEER_ODOMETRY
-from ..onboard import PlatformOnboard
-from .diff_drive import DiffDriveLimits
 from .wheeled import WheeledRobot
 
 if TYPE_CHECKING:
@@ -68,7 +69,7 @@ class SummitXL(WheeledRobot):
     """
 
     kind = "summit_xl"
-    onboard_class = PlatformOnboard
+    view_class = PlatformView
     urdf = "summit_xl.urdf"
     default_limits = SUMMIT_XL_LIMITS
     odometry_errors = SKID_STEER_ODOMETRY

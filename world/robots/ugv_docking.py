@@ -46,21 +46,25 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet
 
+from marsupial.api.model import (
+    CAMERA_FOV_V_DEG,
+    CAMERA_RESOLUTION,
+    ENTRANCE_WIDTH_M,  # noqa: F401 (the slot the URDF models)
+    DiffDriveLimits,
+    Intrinsics,
+)
+from marsupial.api.views import BatteryWheeledView, LiftView
+
 from ..energy import Battery, BatteryGauge, BatterySpec, GroundPowerModel
-from ..onboard import BatteryWheeledOnboard, LiftOnboard, simulates_hardware
 from ..sensors.base import SensorConfig
-from ..sensors.camera import OPTICAL_FORWARD, Camera, Intrinsics
+from ..sensors.camera import OPTICAL_FORWARD, Camera
 from .attachment import place_link_at, weld
 from .base import rotation_matrix, yaw_of
-from .diff_drive import DiffDriveLimits
 from .wheeled import WheeledRobot
 
 if TYPE_CHECKING:
     from ..world import World
 
-ENTRANCE_WIDTH_M = 0.19  # b_e, Table 1 (the slot of mother_ugv.urdf)
-CAMERA_RESOLUTION = (640, 480)  # W × H, Table 1
-CAMERA_FOV_V_DEG = 61.0  # θ_f, Table 1 (vertical, see module docstring)
 # embedded CMOS camera (rate not given): pixel noise, 1 % lost frames, 0.1 s latency (chosen, docs/world.md)
 CAMERA_CONFIG = SensorConfig(rate_hz=10.0, noise_std=3.0, dropout=0.01, latency_s=0.1)
 LIFT_TRAVEL_M = 0.30  # platform travel from the floor to the storage capsule (not given)
@@ -114,7 +118,7 @@ class ChildUGV(WheeledRobot):
     """
 
     kind = "child_ugv"
-    onboard_class = BatteryWheeledOnboard
+    view_class = BatteryWheeledView
     urdf = "child_ugv.urdf"
     default_limits = CHILD_LIMITS
 
@@ -225,7 +229,7 @@ class MotherUGV(WheeledRobot):
     """
 
     kind = "mother_ugv"
-    onboard_class = LiftOnboard
+    view_class = LiftView
     urdf = "mother_ugv.urdf"
     default_limits = MOTHER_LIMITS
 
@@ -265,8 +269,6 @@ class MotherUGV(WheeledRobot):
             maxVelocity=LIFT_SPEED_MPS,
             physicsClientId=self.cid,
         )
-
-    @simulates_hardware
     def platform_height(self) -> float:
         """Height of the platform above its lowered position (m): 0 on the floor, :attr:`lift_travel` at the capsule."""
         return float(pybullet.getJointState(self.body_id, self.lift_joint, physicsClientId=self.cid)[0])
@@ -299,8 +301,6 @@ class MotherUGV(WheeledRobot):
             and np.all(np.abs(corners[:, 1]) <= self.entrance_width / 2)
             and np.all(np.abs(corners[:, 2]) <= 0.02)
         )
-
-    @simulates_hardware
     def platform_switch(self) -> bool:
         """The load switch under the platform plate: pressed while a child UGV stands wholly on the plate.
 

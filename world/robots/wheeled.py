@@ -18,12 +18,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet
 
+from marsupial.api.model import DiffDriveLimits
+from marsupial.api.views import WheeledView
 from marsupial.geometry import Vector
 
 from ..estimation.ground import LOCALIZATIONS, MapErrors, MapLocalization, OdometryErrors, WheelOdometry
-from ..onboard import WheeledOnboard, simulates_hardware
 from .base import Robot, pose_from_list, yaw_of
-from .diff_drive import DiffDrive, DiffDriveLimits
+from .diff_drive import DiffDrive
 
 if TYPE_CHECKING:
     from ..world import World
@@ -62,7 +63,7 @@ class WheeledRobot(Robot):
         estimator: the onboard estimator the skills read.
     """
 
-    onboard_class = WheeledOnboard
+    view_class = WheeledView
     #: file under ``world/assets/`` with a ``base_footprint`` link
     urdf: str = ""
     #: drive limits of the kind (subclasses set the paper's values)
@@ -119,8 +120,6 @@ class WheeledRobot(Robot):
         v, _ = self.velocity()
         yaw = yaw_of(self.pose()[1])
         return float(v[0] * math.cos(yaw) + v[1] * math.sin(yaw))
-
-    @simulates_hardware
     def wheel_speed(self) -> float:
         """Forward speed (m/s) as the wheel encoders measure it (last odometry sample)."""
         return self.odometry.speed

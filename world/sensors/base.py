@@ -13,6 +13,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
+from marsupial.api.readings import Reading
+
 if TYPE_CHECKING:
     from ..world import World
 
@@ -95,14 +97,6 @@ class NormalStream:
             i, j = 0, n
         self._i = j
         return self._buf[i:j]
-
-
-@dataclass(frozen=True)
-class Reading(Generic[T]):
-    """One sample: the simulated time it was taken (s) and its data."""
-
-    stamp: float
-    data: T
 
 
 class Sensor(Generic[T]):

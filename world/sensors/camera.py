@@ -30,13 +30,14 @@ would cost ten times more), all in place.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 import pybullet
+
+from marsupial.api.model import Intrinsics
 
 from .base import Sensor, SensorConfig
 
@@ -51,41 +52,19 @@ OPTICAL_UP = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 """Optical frame looking along the link's +z, image up = link -x."""
 
 
-@dataclass(frozen=True)
-class Intrinsics:
-    """Pinhole intrinsics from resolution and vertical field of view.
+def projection_matrix(intrinsics: Intrinsics) -> list[float]:
+    """OpenGL projection matrix (column-major) for TinyRenderer that renders exactly the intrinsics' ``K``.
 
-    ``fy = (height / 2) / tan(fov_v / 2)``, square pixels (``fx = fy``),
-    principal point at the image centre ``((w-1)/2, (h-1)/2)`` in OpenCV's
-    pixel convention. ``near``/``far`` clip depth (m).
+    TinyRenderer samples each pixel at its corner rather than its centre,
+    which alone would put the rendered principal point at ``(w/2, h/2 - 1)``;
+    shifting normalised device coordinates by half a pixel (-0.5 px in u,
+    +0.5 px in v) places it at ``K``'s ``((w-1)/2, (h-1)/2)``.
     """
-
-    width: int
-    height: int
-    fov_v_deg: float
-    near: float = 0.02
-    far: float = 30.0
-
-    @property
-    def K(self) -> np.ndarray:
-        """3×3 camera matrix in pixels."""
-        f = (self.height / 2.0) / math.tan(math.radians(self.fov_v_deg) / 2.0)
-        return np.array([[f, 0.0, (self.width - 1) / 2.0], [0.0, f, (self.height - 1) / 2.0], [0.0, 0.0, 1.0]])
-
-    def projection_matrix(self) -> list[float]:
-        """OpenGL projection matrix (column-major) for TinyRenderer that renders exactly :attr:`K`.
-
-        TinyRenderer samples each pixel at its corner rather than its centre,
-        which alone would put the rendered principal point at ``(w/2, h/2 - 1)``;
-        shifting normalised device coordinates by half a pixel (-0.5 px in u,
-        +0.5 px in v) places it at ``K``'s ``((w-1)/2, (h-1)/2)``.
-        """
-        projection = list(
-            pybullet.computeProjectionMatrixFOV(self.fov_v_deg, self.width / self.height, self.near, self.far)
-        )
-        projection[8] += 1.0 / self.width  # x_ndc += -1/w · w_clip (w_clip = -z_eye): -0.5 px in u
-        projection[9] += 1.0 / self.height  # y_ndc += -1/h · w_clip: +0.5 px in v (rows grow downwards)
-        return projection
+    i = intrinsics
+    projection = list(pybullet.computeProjectionMatrixFOV(i.fov_v_deg, i.width / i.height, i.near, i.far))
+    projection[8] += 1.0 / intrinsics.width  # x_ndc += -1/w · w_clip (w_clip = -z_eye): -0.5 px in u
+    projection[9] += 1.0 / intrinsics.height  # y_ndc += -1/h · w_clip: +0.5 px in v (rows grow downwards)
+    return projection
 
 
 @dataclass(frozen=True)
@@ -155,7 +134,7 @@ class Camera(Sensor[CameraFrame]):
         self.R_link_optical = np.asarray(R_link_optical, dtype=float)
         self.segmentation = segmentation
         self.depth_noise_per_m = depth_noise_per_m * k
-        self._projection = intrinsics.projection_matrix()
+        self._projection = projection_matrix(intrinsics)
         K = self._K = intrinsics.K
         # x of each column's and y of each row's optical ray with z = 1, so depth == ray parameter
         self._ray_x = ((np.arange(intrinsics.width) - K[0, 2]) / K[0, 0]).astype(np.float32)

@@ -13,12 +13,13 @@ echoes; ``SensorConfig.dropout`` drops whole scans.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 import pybullet
+
+from marsupial.api.model import LidarSpec
 
 from .base import Sensor, SensorConfig
 
@@ -27,44 +28,6 @@ if TYPE_CHECKING:
 
 MAX_RAYS_PER_BATCH = pybullet.MAX_RAY_INTERSECTION_BATCH_SIZE
 _MAX_HITS_PER_BEAM = 64  # objects enumerated along a beam that first hits its own robot
-
-
-@dataclass(frozen=True)
-class LidarSpec:
-    """Geometry of a scanner; the defaults are a Sick LMS111-10100 (Narváez §V-B).
-
-    Attributes:
-        fov_deg: angular field of view (deg), centred on the sensor's +x axis.
-        resolution_deg: angle between beams (deg); the LMS111 gives 0.5° at 50 Hz.
-        max_range: farthest echo (m).
-        start_range: distance (m) from the sensor origin where beams start (outside the housing).
-        beam_dropout: probability in [0, 1] that one beam returns no echo.
-    """
-
-    fov_deg: float = 270.0
-    resolution_deg: float = 0.5
-    max_range: float = 20.0
-    start_range: float = 0.06
-    beam_dropout: float = 0.0
-
-    def __post_init__(self) -> None:
-        if not 0.0 < self.fov_deg <= 360.0 or self.resolution_deg <= 0.0:
-            raise ValueError(
-                f"fov_deg must be in (0, 360] and resolution_deg > 0; got {self.fov_deg}, {self.resolution_deg}"
-            )
-        if not 0.0 <= self.start_range < self.max_range:
-            raise ValueError(f"need 0 <= start_range < max_range; got {self.start_range}, {self.max_range}")
-        if not 0.0 <= self.beam_dropout <= 1.0:
-            raise ValueError(f"beam_dropout must be within [0, 1], got {self.beam_dropout}")
-
-    def angles(self) -> np.ndarray:
-        """Beam angles (rad, float32), counter-clockwise from the sensor's +x axis."""
-        half = math.radians(self.fov_deg) / 2.0
-        step = math.radians(self.resolution_deg)
-        n = int(round(2.0 * half / step)) + 1
-        if self.fov_deg == 360.0:  # a full turn would count the seam twice
-            n -= 1
-        return (-half + step * np.arange(n)).astype(np.float32)
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ left out. s_u^e of eq. (7) is recorded beside it: s_u with the child aligned
 on the entry direction at :data:`ENTRANCE_DISTANCE_M`. Regenerate the shipped
 list after changing the robot, the benchmark or the extraction::
 
-    python -m marsupial.world.ugv_criterion [--out PATH]
+    python -m marsupial.tools.ugv_criterion [--out PATH]
 """
 
 from __future__ import annotations
@@ -25,9 +25,8 @@ from pathlib import Path
 import marsupial.skills.ugv_docking as ugv_docking
 from marsupial.skills.ugv_docking.criterion import CriterionList
 from marsupial.skills.ugv_docking.features import extract_features
-
-from .robots.ugv_docking import ChildUGV, MotherUGV, place_child
-from .world import World
+from marsupial.world import World
+from marsupial.world.robots.ugv_docking import ChildUGV, MotherUGV, place_child
 
 CRITERION_DISTANCE_M = 0.40  # chosen (the paper gives none): two child lengths, the whole benchmark in view
 # s_u^e's distance: H_GS leaves the top of the image at y_e ≈ 0.226 m (the paper's d_e = 0.22 m, see
@@ -90,7 +89,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     header = (
         f"# Criterion list f_list (Zhao et al., Remark 2) of the {f_list.robot}: (k_h, s_u) with the child at\n"
         f"# {f_list.distance} m from the benchmark, and s_u^e of eq. (7): s_u aligned on the entry direction at\n"
-        f"# {f_list.entrance_distance} m; recorded by `python -m marsupial.world.ugv_criterion`.\n"
+        f"# {f_list.entrance_distance} m; recorded by `python -m marsupial.tools.ugv_criterion`.\n"
     )
     args.out.write_text(header + f_list.to_yaml())
     print(f"wrote {len(f_list.entries)} entries to {args.out}")

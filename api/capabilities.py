@@ -1,16 +1,15 @@
-"""What a robot can do, as typed protocols of its onboard interface, and the resources its commands drive.
+"""What a robot can do, as typed protocols of its view, and the resources its commands drive.
 
 A node states the robots it accepts by capability (``robot_kinds =
 (Rotorcraft,)``), and a team-member parameter can require one
-(``TeamMember(Carrier)``); the compiler checks them against the onboard
-interface class of each robot kind (:func:`provides`), and skills test a
-member with ``isinstance(context.onboard(name), Carrier)``. One vocabulary
-serves both: these protocols, implemented by the interfaces of
-:mod:`marsupial.world.onboard`.
+(``TeamMember(Carrier)``); the compiler checks them against the view class
+of each robot kind (:func:`provides`), and skills test a member with
+``self.member(name).provides(Carrier)``. One vocabulary serves both: these
+protocols, implemented by the views of :mod:`marsupial.api.views`.
 
 Resources are the parts of a robot that one node at a time drives
-(:data:`RESOURCES`); each command method of an onboard interface drives one
-(:attr:`~marsupial.world.onboard.Onboard.commands`), and the run's arbiter
+(:data:`RESOURCES`); each command method of a view drives one
+(:attr:`~marsupial.api.views.RobotView.commands`), and the run's arbiter
 stamps commands per robot and resource (:mod:`marsupial.trees.arbitration`).
 """
 
@@ -22,8 +21,9 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 if TYPE_CHECKING:
     import numpy as np
 
-    from .energy import BatteryStatus
-    from .onboard import DockingPort, SensorPort
+    from .kinematics import ArmKinematics
+    from .readings import BatteryStatus
+    from .views import DockingView, SensorView
 
 #: the resources of the robots: wheeled base, arm joints, rotors (flight controller and its estimator),
 #: docking device (magnet and levers), gripper, lifting platform
@@ -63,7 +63,7 @@ class HasLidar(Protocol):
     """A robot with a planar LiDAR (sensor ``lidar``)."""
 
     @property
-    def lidar(self) -> SensorPort:
+    def lidar(self) -> SensorView:
         """The planar LiDAR."""
 
 
@@ -128,7 +128,7 @@ class HasArmModel(HasArm, Protocol):
     """An arm whose model the robot's computer has: kinematics and the estimated pose of its base frame M."""
 
     @property
-    def arm_kinematics(self) -> Any:
+    def arm_kinematics(self) -> ArmKinematics:
         """Kinematic model of the arm (frame M → its links), from the URDF."""
 
     def arm_base_pose(self) -> tuple[np.ndarray, np.ndarray]:
@@ -140,11 +140,11 @@ class Carrier(HasArm, HasBase, Protocol):
     """A carrier with a docking device on its arm (resources ``base``, ``arm``, ``docking``): the mobile manipulator."""
 
     @property
-    def docking(self) -> DockingPort:
+    def docking(self) -> DockingView:
         """Part A of the docking device (resource ``docking``): magnet, levers, switches."""
 
     @property
-    def arm_kinematics(self) -> Any:
+    def arm_kinematics(self) -> ArmKinematics:
         """Kinematic model of the arm (frame M → ``part_a``), from the URDF."""
 
     def arm_pose(self, name: str) -> np.ndarray:
@@ -169,16 +169,16 @@ class HasGripper(Protocol):
 class HasScoutLauncher(Protocol):
     """Launching apparatuses with micro-scouts, held by the gripper (resource ``gripper``): the launch command."""
 
-    def release_scout(self) -> bool:
-        """Open the held apparatus's hold on its MAV; whether one was let go."""
+    def release_scout(self) -> None:
+        """Open the held apparatus's hold on its MAV (the launch command)."""
 
 
 @runtime_checkable
 class HasLift(Protocol):
     """A lifting platform (resource ``lift``): raise, lower, height, its load switch and travel."""
 
-    def raise_platform(self) -> list[str]:
-        """Raise the platform; returns the team members it lifts."""
+    def raise_platform(self) -> None:
+        """Raise the platform to the storage capsule."""
 
     def lower_platform(self) -> None:
         """Lower the platform to the floor."""
@@ -212,10 +212,10 @@ def members(capability: type) -> frozenset[str]:
     return frozenset(names)
 
 
-def provides(onboard_class: type, capability: type) -> bool:
-    """Whether instances of ``onboard_class`` (an onboard interface class) have ``capability``, checked on the class.
+def provides(view_class: type, capability: type) -> bool:
+    """Whether instances of ``view_class`` (a robot view class) have ``capability``, checked on the class.
 
     ``isinstance(interface, capability)`` answers the same for an instance;
     this form lets the compiler check a robot kind before any world exists.
     """
-    return all(hasattr(onboard_class, name) for name in members(capability))
+    return all(hasattr(view_class, name) for name in members(capability))

@@ -36,7 +36,7 @@ import numpy as np
 import shapely
 from shapely.geometry import MultiPoint, Polygon
 
-from marsupial.world.assets import asset_path
+from marsupial.api.assets import asset_path
 
 MAV_URDF = "tello.urdf"  # the micro-scout of §III-B
 APPARATUS_URDF = "launching_apparatus.urdf"  # the cradle that holds it through the aperture
