@@ -228,3 +228,45 @@ class RobotReadings:
     docking: DockingStatus | None = None
     sensors: dict[str, Reading[Any] | None] = field(default_factory=dict)
     streams: dict[str, tuple[Reading[Any], ...]] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class ImuData:
+    """One IMU sample.
+
+    Attributes:
+        linear_acceleration: specific force (m/s², body frame), includes the gravity reaction.
+        angular_velocity: body rates (rad/s, body frame).
+        orientation: ``[x, y, z, w]`` quaternion of the body in the world frame, as the attitude filter outputs it.
+    """
+
+    linear_acceleration: np.ndarray
+    angular_velocity: np.ndarray
+    orientation: np.ndarray
+
+
+@dataclass(frozen=True)
+class RangeData:
+    """One range sample: distance to the first echo (m, ``inf`` if none) and the beam's geometry."""
+
+    range: float
+    half_angle: float  # rad, beam cone half-angle
+    min_range: float  # m, shorter echoes read as min_range
+    max_range: float  # m
+
+
+@dataclass(frozen=True)
+class FlowData:
+    """One optical-flow sample.
+
+    Attributes:
+        valid: False when no surface is in range (the velocity is then 0).
+        vx, vy: velocity relative to the surface (m/s), heading frame (x forward, y left).
+        range: median depth (m) of the surface along the camera axis, by which the device scaled the flow
+            (``inf`` if none).
+    """
+
+    valid: bool
+    vx: float
+    vy: float
+    range: float

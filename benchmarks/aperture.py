@@ -77,13 +77,13 @@ from marsupial.skills.aperture import DetectionParams, ProfileParams, detect_ape
 from marsupial.skills.aperture.detection import ApertureCandidate, eye_in_hand_frame
 from marsupial.skills.aperture.profile import LaunchConfiguration
 from marsupial.skills.aperture.scan import LEVEL_POSE
+from marsupial.tools.rig import live_view
 from marsupial.trees.campaign import WILSON_Z, wilson_interval
 from marsupial.trees.mission import load_mission
 from marsupial.trees.replay import RunLog, read_log
 from marsupial.world import World
 from marsupial.world.apertures import aperture_outline, rasterised
 from marsupial.world.disturbances import apply_disturbances
-from marsupial.world.onboard import onboard_of
 from marsupial.world.robots.mms import CAMERA_INTRINSICS
 from marsupial.world.scene import Zone
 
@@ -120,7 +120,7 @@ def facing_frames(world: World, x: float, standoff: float, count: int, robot: st
     """
     mms = world.add_robot("mms", robot, pose=[x, WALL_FACE_Y - standoff - CAMERA_AHEAD_M, math.pi / 2],
                           arm_q=LEVEL_POSE, mavs=False)
-    onboard = onboard_of(mms)
+    onboard = live_view(mms.world, mms.name)
     onboard.set_joint_targets(LEVEL_POSE)
     camera = onboard.sensor("camera")
     world.step(0.3)

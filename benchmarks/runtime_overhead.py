@@ -8,7 +8,8 @@ Two measurements, pinned to one CPU core:
    20-35 ticks, i.e. 2-3.5 s at 10 Hz, then succeeds; every start and end
    is a recorded event),
    compiled from a mission by the real compiler, ticked as the runner does
-   (arbiter tick, ``tick_once``, ``Recorder.log_tree`` snapshot) with the
+   (the world's tick input, the tree host's tick, its output applied and
+   recorded: events, ``/tree`` snapshot) with the
    simulated clock advanced by one tick period and no physics:
    ``mission-like`` = a parallel of 20 ``repeat`` loops over sequences of 8
    skills (61 behaviours ticked per tick), ``all-ticked`` = a parallel of
@@ -50,13 +51,14 @@ from pydantic import Field
 from rich.console import Console
 from rich.table import Table
 
+from marsupial.trees.bridge import WorldBridge
 from marsupial.trees.cli import DEFAULT_MISSION
-from marsupial.trees.compiler import compile_mission
+from marsupial.trees.host import TreeHost
 from marsupial.trees.live import LiveSink
 from marsupial.trees.mission import parse_mission
 from marsupial.trees.recorder import Recorder
 from marsupial.trees.runner import run_mission
-from marsupial.trees.skill import NodeParams, RunContext, Skill
+from marsupial.trees.skill import NodeParams, Skill
 from marsupial.world import World
 
 TARGET_TICKS_PER_S = 2000.0
@@ -109,18 +111,14 @@ def ticks_per_second(shape: str, ticks: int, record: bool, repeats: int) -> dict
     for _ in range(repeats):
         py_trees.blackboard.Blackboard.clear()
         with World() as world, tempfile.TemporaryDirectory() as tmp:
-            context = RunContext(world=world)
-            tree = compile_mission(parse_mission(tree_mission(shape)), context)
-            nodes = tree.count()
-            steps = world.clock.steps_for(1.0 / TICK_HZ)
             recorder = Recorder(Path(tmp) / "bench.mcap", {"mission": shape}) if record else None
-            context.recorder = recorder
+            bridge, mission = WorldBridge(world, recorder), parse_mission(tree_mission(shape))
+            host = TreeHost.for_mission(mission, bridge.setup(mission, 0))
+            nodes = sum(1 for _ in host.root.iterate())
+            steps = world.clock.steps_for(1.0 / TICK_HZ)
             start = time.perf_counter()
             for _ in range(ticks):
-                context.arbiter.new_tick()
-                tree.root.tick_once()
-                if recorder is not None:
-                    recorder.log_tree(world.now, tree.root)
+                bridge.apply(host.tick(bridge.tick_input()))
                 world.clock.steps += steps  # simulated time moves on; no physics in this measurement
             if recorder is not None:
                 recorder.close("benchmark")

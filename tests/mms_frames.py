@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import math
 
-from live_view import live_view
-
 from marsupial.skills.aperture.detection import DepthFrame, eye_in_hand_frame
 from marsupial.skills.aperture.scan import LEVEL_POSE
+from marsupial.tools.rig import live_view
 from marsupial.world import World
 
 WALL_FACE_Y = -0.05  # the aperture wall's face toward the approach side (0.1 m thick at y = 0)

@@ -16,9 +16,10 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
-from marsupial.api.ticks import TreeSetup
+from marsupial.api.ticks import TickOutput, TreeSetup
 from marsupial.trees.bridge import WorldBridge
 from marsupial.trees.host import TreeHost, deliver, run_context
+from marsupial.trees.operator import OperatorChannel
 from marsupial.trees.recorder import Recorder
 from marsupial.trees.skill import NodeParams
 from marsupial.world import World
@@ -34,9 +35,12 @@ class Harness:
     (tracking errors, unintended contacts), as in a mission run.
     """
 
-    def __init__(self, world: World, tick_hz: float = 10.0, log_path: str | Path | None = None):
+    def __init__(self, world: World, tick_hz: float = 10.0, log_path: str | Path | None = None,
+                 operator: OperatorChannel | None = None):
         py_trees.blackboard.Blackboard.clear()
         self.world = world
+        #: the operator's commands, polled before every tick and delivered with its input
+        self.operator = operator
         self.recorder = Recorder(log_path, {"mission_name": "harness"}) if log_path is not None else None
         self.bridge = WorldBridge(world, self.recorder)
         setup = TreeSetup("", None, {}, {}, world.seed, tick_hz, self.bridge.team(), self.bridge.priors())
@@ -56,6 +60,12 @@ class Harness:
         deliver(self.context, self.bridge.tick_input())
         self.context.arbiter.new_tick()
 
+    def flush(self) -> None:
+        """Apply the commands nodes sent outside :meth:`run` (after :meth:`feed` and direct checks) to the world."""
+        sent, records = self.context.arbiter.take(), tuple(self.context.records)
+        self.context.records.clear()
+        self.bridge.apply(TickOutput(tuple(c for _, c in sent), tuple(s for s, _ in sent), records))
+
     def host(self, root: Behaviour) -> TreeHost:
         """The tree side ticking ``root`` (kept while the root is the same)."""
         if self._host is None or self._host.root is not root:
@@ -67,7 +77,8 @@ class Harness:
         host, bridge = self.host(root), self.bridge
         end = self.world.now + seconds
         while True:
-            bridge.apply(host.tick(bridge.tick_input()))
+            said = self.operator.poll(self.world.now) if self.operator is not None else ()
+            bridge.apply(host.tick(bridge.tick_input(said)))
             if self.recorder is not None:
                 robots = self.world.robots.items()
                 self.recorder.log_robot_poses(

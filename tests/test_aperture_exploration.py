@@ -25,6 +25,7 @@ from marsupial.skills.aperture.exploration import (
 from marsupial.skills.aperture.explore import ExplorationStuck, ExploreVolume
 from marsupial.skills.aperture.volumetric import OCCUPIED, UNKNOWN, SensorCloud, VolumetricMap
 from marsupial.skills.navigation import Footprint
+from marsupial.tools.rig import live_view
 from marsupial.trees.replay import read_log
 from marsupial.world import World
 
@@ -101,7 +102,7 @@ def test_the_mms_explores_the_approach_area_until_stuck(tmp_path):
         stuck = harness.node(ExplorationStuck, robot="mms")
         root = Sequence("explore, then stuck", memory=True, children=[explore, stuck])
         status = harness.run(root, 150.0)
-        estimate = harness.context.onboard("mms").estimate()
+        estimate = live_view(world, "mms").estimate()
         harness.close()
     assert status.name == "SUCCESS", explore.feedback_message
     events = read_log(log).events_of("state_change")

@@ -6,10 +6,10 @@ The battery monitor, the LiDAR scan, the estimate against the declared plan.
 import math
 
 import pytest
-from live_view import live_view
 from skill_harness import Harness
 
 from marsupial.api.errors import UnknownNameError
+from marsupial.tools.rig import live_view
 from marsupial.trees.conditions import BatteryBelow, DifficultArea, ObstacleAhead
 from marsupial.trees.skill import RunContext
 from marsupial.world import World

@@ -105,8 +105,8 @@ def test_an_occlusion_during_contact_cancels_and_asks_for_authorization_again(tm
     with World(seed=2) as world:
         world.add_robot("mobile_manipulator", "carrier", arm_pose="docking_ready", sensors=EYE_IN_HAND)
         uav = world.add_robot("bebop2", "uav", pose=[-0.2, 0.1, 1.3, 0.0])
-        harness = Harness(world, tick_hz=10, log_path=tmp_path / "occlusion.mcap")
-        harness.context.operator = channel = OperatorChannel()
+        channel = OperatorChannel()
+        harness = Harness(world, tick_hz=10, log_path=tmp_path / "occlusion.mcap", operator=channel)
         channel.say("authorize_contact", why="first contact")
         track, contact = harness.node(Track, "uav"), harness.node(Contact, "uav")
         root = Sequence("docking", memory=True, children=[
@@ -116,7 +116,6 @@ def test_an_occlusion_during_contact_cancels_and_asks_for_authorization_again(tm
         occluded, gaps = [], []
 
         def on_tick():
-            channel.poll(world.now)
             state: TrackingState | None = harness.blackboard("carrier/tracking")
             if state is not None and state.p_B_A is not None:
                 gaps.append((world.now, state.p_B_A[2], getattr(contact, "phase", None)))
@@ -145,8 +144,9 @@ def test_an_occlusion_during_contact_cancels_and_asks_for_authorization_again(tm
     t, gap = np.array(t), np.array(gap)
     at_cancel = gap[np.searchsorted(t, cancel["t"])]
     approach = next(e for e in log.events_of("state_change") if e.get("phase") == "approach")
-    dropped = gap[(t > cancel["t"] + 1.5) & (t < cancel["t"] + 3.0)]
-    # (the UAV wanders by centimetres around its hold pose on its own estimate)
+    dropped = gap[(t > cancel["t"] + 2.5) & (t < cancel["t"] + 3.5)]
+    # (the UAV wanders by centimetres around its hold pose on its own estimate; a gust guard's back-off just
+    # before the cancel leaves Part A lower still, from where it takes about 2 s to rise to the standoff)
     assert dropped.min() > at_cancel + 0.03 and np.abs(dropped - approach["gap"]).max() < 0.04
 
 

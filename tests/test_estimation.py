@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pybullet
 import pytest
-from live_view import live_view
 
+from marsupial.tools.rig import live_view
 from marsupial.world import World
 from marsupial.world.sensors.imu import quat_yaw
 

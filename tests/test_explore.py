@@ -13,7 +13,6 @@ import math
 
 import numpy as np
 import pytest
-from live_view import live_view
 from py_trees.common import Status
 from skill_harness import Harness
 
@@ -30,6 +29,7 @@ from marsupial.skills.uav_docking.coverage import (
     visible_cells,
 )
 from marsupial.skills.uav_docking.explore import Explore
+from marsupial.tools.rig import live_view
 from marsupial.trees.replay import read_log
 from marsupial.trees.runner import run_mission
 from marsupial.world import World

@@ -119,7 +119,8 @@ def test_an_empty_battery_ends_the_cycle_with_a_failure(tmp_path):
     result, log = _run(tmp_path, "landing_lifelong", cycles=1, **{"team.uav.options.battery_capacity_mAh": 1})
     assert result.outcome == "failure"  # not a run that hangs until its time limit
     outcome = next(e for e in log.events if e["kind"] == "outcome" and e["skill"] == "takeoff")
-    assert outcome["status"] == "FAILURE" and outcome["message"].startswith("motors stopped, battery at 0%")
+    # the gauge's last sample (1 Hz) may predate the last milliamp-hour: the failure names what it read
+    assert outcome["status"] == "FAILURE" and outcome["message"].startswith("motors stopped, battery at ")
 
 
 def test_flight_params_resolve_the_controller_variants():

@@ -4,11 +4,11 @@ import math
 
 import numpy as np
 import pytest
-from live_view import live_view
 
 from marsupial.geometry import heading_rotation, rotation_matrix, yaw_of
 from marsupial.skills.landing.touchdown import TouchdownParams, TouchdownTest
 from marsupial.skills.landing.tracking import StampedHistory, TrackingModule
+from marsupial.tools.rig import live_view
 from marsupial.trees.skill import RunContext
 from marsupial.world import World
 

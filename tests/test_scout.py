@@ -12,7 +12,6 @@ import math
 import numpy as np
 import pytest
 from click.testing import CliRunner
-from live_view import live_view
 from pydantic import ValidationError
 
 from marsupial.api.views import LinkState, LinkView
@@ -21,6 +20,7 @@ from marsupial.skills.scout.detection import HsvColourDetector
 from marsupial.skills.scout.policy import decide, velocity_command
 from marsupial.skills.scout.relay import RelayedFrame, VideoReceiver, VideoSender, decode_frame, encode_frame
 from marsupial.skills.scout.skills import Scout
+from marsupial.tools.rig import DirectSink, live_view
 from marsupial.trees.cli import cli
 from marsupial.trees.replay import read_log
 from marsupial.trees.runner import run_mission
@@ -143,10 +143,9 @@ def test_the_relay_delivers_decoded_frames_late_and_counts_the_lost_ones():
     with World(scene="collapsed_mockup", seed=5, team_link=link) as world:
         world.add_robot("mms", "mms", pose=[0.3, -2.4, 1.5708], mavs=False)
         world.add_robot("tello", "scout", pose=START)
-        scout = live_view(world, "scout")
-        camera, delivered = scout.sensor("front_camera"), LinkState()
-        sender = VideoSender(LinkView("scout", delivered, scout._sink), quality=80, with_depth=True)
-        receiver = VideoReceiver(LinkView("mms", delivered, scout._sink), "scout")
+        camera, delivered, radio = live_view(world, "scout").sensor("front_camera"), LinkState(), DirectSink(world)
+        sender = VideoSender(LinkView("scout", delivered, radio), quality=80, with_depth=True)
+        receiver = VideoReceiver(LinkView("mms", delivered, radio), "scout")
         originals, frames = {}, []
         for _ in range(40):
             world.step(0.1)

@@ -49,6 +49,10 @@ FORBIDDEN_ATTRIBUTES = frozenset({"world", "body_id", "client_id", "cid", "bulle
 INTROSPECTION_CALLS = frozenset({"vars", "globals", "locals"})
 #: ticks between two walks of a node's graph after its first tick
 WALK_EVERY = 200
+#: nodes of a mission's tree that its run does not tick, and why (they are ticked by another mission of the suite)
+NOT_TICKED = {
+    "aperture_scouts": {"scout_return"},  # the recall branch of scout_object: the mission scripts no recall
+}
 
 
 def _module_of(node: ast.ImportFrom, path: Path) -> str:
@@ -181,13 +185,14 @@ def test_no_node_can_reach_the_simulator_or_the_referee(path: Path, walker: _Wal
     result = run_mission(path, progress=False)
     assert result.outcome in ("success", "time_limit"), result.message
     assert walker.hits == [], walker.hits[0]
-    assert _kinds(path) <= walker.ticked, f"never ticked: {sorted(_kinds(path) - walker.ticked)}"
+    expected = _kinds(path) - NOT_TICKED.get(path.stem, set())
+    assert expected <= walker.ticked, f"never ticked: {sorted(expected - walker.ticked)}"
 
 
 def test_every_registered_node_is_ticked_by_some_mission_of_the_suite(capsys: pytest.CaptureFixture[str]) -> None:
     registry = Registry({})
     registered = set(registry.names("skill")) | set(registry.names("condition"))
-    used = {path.stem: _kinds(path) for path in SHIPPED + COVERAGE}
+    used = {path.stem: _kinds(path) - NOT_TICKED.get(path.stem, set()) for path in SHIPPED + COVERAGE}
     with capsys.disabled():
         print("\nnodes ticked, by mission:")
         for name, kinds in sorted(used.items()):

@@ -64,8 +64,9 @@ def _checks(harness: Harness, world: World, conditions: dict, seconds: float = 0
     """Each condition checked every 0.1 s (as the tree ticks) for ``seconds``; the last results."""
     results = {}
     for _ in range(round(seconds / 0.1)):
-        harness.context.arbiter.new_tick()
+        harness.feed(*conditions.values())
         results = {name: node.check() for name, node in conditions.items()}
+        harness.flush()  # the child's features go out on the team link
         world.step(0.1)
     return results
 
@@ -99,6 +100,7 @@ def test_conditions_on_the_child_camera(yard):
     c1, c4 = [], []
     for _ in range(8):  # 0.1 s steps: one 10 Hz camera frame each
         world.step(0.1)
+        h.feed(captured, lost)
         c1.append(captured.check())
         c4.append(lost.check())
     # C1 fails from the first frame taken facing away; C4 holds from the third successive such frame on

@@ -20,7 +20,6 @@ from marsupial.api.model import RobotModel
 from marsupial.api.priors import BuildingPlan
 from marsupial.api.ticks import OperatorCommand, TickInput, TickOutput, TreeSetup
 from marsupial.world.gateway import RobotGateway
-from marsupial.world.priors import building_plan
 
 from . import exchange_log
 
@@ -92,7 +91,7 @@ class WorldBridge:
 
     def priors(self) -> dict[str, BuildingPlan]:
         """The scene knowledge an operator gives the robots: the building plan of the world's scene."""
-        return {"building_plan": building_plan(self.world.scene)}
+        return {"building_plan": self.world.plan}
 
     def tick_input(self, operator: Iterable[OperatorCommand] = (), kind: str = "tick") -> TickInput:
         """The next tick's input: the time, every robot's readings (the sensors asked for), link deliveries.

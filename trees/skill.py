@@ -137,6 +137,8 @@ class RunContext:
     record_images: bool = False
     records: list[LogRecord] = field(default_factory=list)
     metrics: dict[str, float] = field(default_factory=dict)
+    #: what the nodes of the run share by name (e.g. one camera observer for every node looking through it)
+    shared: dict[str, Any] = field(default_factory=dict)
 
     def rng(self, key: str) -> np.random.Generator:
         """A seeded random stream for ``key`` (derived from the run's seed; e.g. a planner's samples)."""

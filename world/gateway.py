@@ -166,9 +166,9 @@ class RobotGateway:
         streams: dict[str, tuple[Reading[Any], ...]] = {}
         for name in sensors:
             sensor = robot.sensor(name)
-            newest[name] = self._deliverable(sensor)
+            newest[name] = self.deliverable(sensor)
             if not isinstance(sensor, (Camera, Lidar)):
-                streams[name] = self._stream(name, sensor)
+                streams[name] = self.stream(name, sensor)
         return RobotReadings(now, sensors=newest, streams=streams, **fields)
 
     def _docking_status(self) -> DockingStatus:
@@ -184,7 +184,7 @@ class RobotGateway:
         )
 
     @staticmethod
-    def _deliverable(sensor: Sensor[Any]) -> Reading[Any] | None:
+    def deliverable(sensor: Sensor[Any]) -> Reading[Any] | None:
         """The sensor's newest readable sample as the robot receives it (frames without pose or segmentation)."""
         reading = sensor.read()
         if reading is None:
@@ -198,7 +198,7 @@ class RobotGateway:
             return Reading(reading.stamp, RangeScan(scan.ranges, scan.angles, scan.max_range))
         return reading
 
-    def _stream(self, name: str, sensor: Sensor[Any]) -> tuple[Reading[Any], ...]:
+    def stream(self, name: str, sensor: Sensor[Any]) -> tuple[Reading[Any], ...]:
         """The samples of a queued sensor since its last delivery (the first call starts its queue)."""
         queue = self._queues.get(name)
         if queue is None:

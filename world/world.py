@@ -133,9 +133,12 @@ class World:
         if gui:
             b.configureDebugVisualizer(pybullet.COV_ENABLE_GUI, 0)
 
+        from .priors import building_plan
         from .scene import load_scene
 
         self.scene: Scene = load_scene(self, scene)
+        #: what an operator can hand the robots of the scene as loaded from its file, before any disturbance
+        self.plan = building_plan(self.scene)
 
     # ----------------------------------------------------------------- time
     @property

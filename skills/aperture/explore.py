@@ -34,6 +34,7 @@ before one has run). It plans again only when M or the estimate changed.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -376,7 +377,7 @@ class ExplorationStuck(Condition["ExplorationStuck.Params"]):
         if self._key != key:
             params = record.params
             if self.params.stuck_gain is not None:
-                params = ExplorationParams(**{**params.__dict__, "stuck_gain": self.params.stuck_gain})
+                params = dataclasses.replace(params, stuck_gain=self.params.stuck_gain)
             self._key = key
             self._stuck = not plan_viewpoints(occupancy, pose, record.camera_offset, params, record.visited, z)
         return self._stuck

@@ -34,6 +34,7 @@ speeds m/s, times simulated s.
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, ClassVar, Literal, TypeVar, get_args
 
 import numpy as np
@@ -139,8 +140,11 @@ class FlightSkill(Skill[PF]):
         return float(np.clip(gain * (height - self.module.height), -max_speed, max_speed))
 
     def climb_tracking(self, p: ClimbParams) -> bool:
-        """Climb at ``climb_speed`` towards the nominal height while tracking; True (no command) once there."""
-        if self.module.height >= p.nominal_height - p.tolerance:
+        """Climb at ``climb_speed`` towards the nominal height while tracking; True (no command) once there.
+
+        Before the first sonar reading the height is unknown (``inf``): the UAV climbs.
+        """
+        if math.isfinite(self.module.height) and self.module.height >= p.nominal_height - p.tolerance:
             return True
         self.fly(min(p.climb_speed, self.hold_height(p.nominal_height, p.height_gain, p.climb_speed)))
         return False

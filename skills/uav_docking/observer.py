@@ -95,7 +95,7 @@ class EyeInHandObserver:
     @classmethod
     def of(cls, context: Any, carrier: Any) -> EyeInHandObserver:
         """The observer shared by every node of the run ``context`` looking through ``carrier``'s eye-in-hand camera."""
-        shared: dict[str, EyeInHandObserver] = vars(context).setdefault("_eye_in_hand_observers", {})
+        shared: dict[str, EyeInHandObserver] = context.shared.setdefault("eye_in_hand_observers", {})
         observer = shared.get(carrier.name)
         if observer is None:
             observer = shared[carrier.name] = cls(carrier)

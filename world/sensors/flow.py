@@ -29,10 +29,11 @@ the sample is invalid.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import pybullet
+
+from marsupial.api.readings import FlowData
 
 from .base import Sensor, SensorConfig
 
@@ -41,23 +42,6 @@ if TYPE_CHECKING:
 
 
 FLOW_HALF_ANGLE = math.radians(15.0)  # rad, the part of the vertical camera's view the flow is measured in (chosen)
-
-
-@dataclass(frozen=True)
-class FlowData:
-    """One optical-flow sample.
-
-    Attributes:
-        valid: False when no surface is in range (the velocity is then 0).
-        vx, vy: velocity relative to the surface (m/s), heading frame (x forward, y left).
-        range: median depth (m) of the surface along the camera axis, by which the device scaled the flow
-            (``inf`` if none).
-    """
-
-    valid: bool
-    vx: float
-    vy: float
-    range: float
 
 
 class OpticalFlow(Sensor[FlowData]):

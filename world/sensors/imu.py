@@ -30,6 +30,8 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
+from marsupial.api.readings import ImuData
+
 from ..world import GRAVITY
 from .base import Sensor, SensorConfig
 
@@ -68,21 +70,6 @@ class ImuErrors:
     gyro_bias_std: float = 0.0005
     attitude_std: float = math.radians(0.5)
     attitude_tau: float = 10.0
-
-
-@dataclass(frozen=True)
-class ImuData:
-    """One IMU sample.
-
-    Attributes:
-        linear_acceleration: specific force (m/s², body frame), includes the gravity reaction.
-        angular_velocity: body rates (rad/s, body frame).
-        orientation: ``[x, y, z, w]`` quaternion of the body in the world frame, as the attitude filter outputs it.
-    """
-
-    linear_acceleration: np.ndarray
-    angular_velocity: np.ndarray
-    orientation: np.ndarray
 
 
 def quat_multiply(a: Quat, b: Quat) -> Quat:

@@ -10,27 +10,17 @@ are ignored. Nothing within ``max_range``: the range is ``inf``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import pybullet
 
+from marsupial.api.readings import RangeData
 from marsupial.geometry import Vector
 
 from .base import Sensor, SensorConfig
 
 if TYPE_CHECKING:
     from ..robots.base import Robot
-
-
-@dataclass(frozen=True)
-class RangeData:
-    """One range sample: distance to the first echo (m, ``inf`` if none) and the beam's geometry."""
-
-    range: float
-    half_angle: float  # rad, beam cone half-angle
-    min_range: float  # m, shorter echoes read as min_range
-    max_range: float  # m
 
 
 class Sonar(Sensor[RangeData]):

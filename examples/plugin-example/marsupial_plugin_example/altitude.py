@@ -1,4 +1,4 @@
-"""A condition: the robot flies above a height."""
+"""A condition: the robot flies above a height (as its own estimate tells it; no sensor to declare)."""
 
 from __future__ import annotations
 

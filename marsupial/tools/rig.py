@@ -1,7 +1,7 @@
-"""Test rigs only: a robot's view read straight from a live world, its commands applied at once.
+"""Bench rigs: a robot's view read straight from a live world, its commands applied at once.
 
-Unit tests of algorithms (detection on a real frame, an estimator after a
-few steps) want a robot's view without a tree around it. :func:`live_view`
+Unit tests and benchmarks of algorithms (detection on a real frame, an
+estimator after a few steps) want a robot's view without a tree around it. :func:`live_view`
 builds one of the robot's view class whose readings are taken from the
 world whenever they are read (a sensor is sampled when it is read) and
 whose commands the world applies immediately. Mission runs never use this:
@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections import deque
 from typing import Any
 
-from marsupial.api.commands import Command, LinkSend
+from marsupial.api.commands import Command, LinkSend, SafeStop
 from marsupial.api.readings import RobotReadings
 from marsupial.api.views import RobotState, RobotView
 from marsupial.world import World
@@ -31,12 +31,12 @@ class _Sensors:
         robot = self._gateway.robot
         sensor = robot.sensor(name)
         if self._queued:
-            return deque(self._gateway._stream(name, sensor))
-        return self._gateway._deliverable(sensor)
+            return deque(self._gateway.stream(name, sensor))
+        return self._gateway.deliverable(sensor)
 
 
 class LiveState(RobotState):
-    """A robot state whose readings come from the world at every access (test rigs only)."""
+    """A robot state whose readings come from the world at every access (bench rigs only)."""
 
     __slots__ = ("_gateway",)
 
@@ -59,23 +59,23 @@ class LiveState(RobotState):
 
 
 class DirectSink:
-    """Commands applied to the world at once, every sensor readable, every resource commandable."""
+    """Commands applied to the world at once, team-link sends put on its radio; every sensor readable."""
 
-    def __init__(self, world: World, gateway: RobotGateway):
+    def __init__(self, world: World):
         self._world = world
-        self._gateway = gateway
 
     def submit(self, resource: str, command: Command) -> bool:
-        self._gateway.apply(command)
+        """Apply ``command`` to its robot now."""
+        RobotGateway(self._world.robot(command.robot)).apply(command)
         return True
 
     def safe_stop(self, robot: RobotView) -> None:
-        from marsupial.api.commands import SafeStop
-
+        """Apply the safe stop of each of ``robot``'s resources now."""
         for resource in sorted(robot.safe_stops):
-            self._gateway.apply(SafeStop(robot.name, resource))
+            self.submit(resource, SafeStop(robot.name, resource))
 
     def broadcast(self, command: LinkSend) -> None:
+        """Send a team-link message now."""
         self._world.team_link.send(command.robot, command.topic, command.payload)
 
     def check_read(self, robot: str, sensor: str) -> None:
@@ -85,7 +85,7 @@ class DirectSink:
 def live_view(world: World, name: str) -> Any:
     """The view of team member ``name`` read live from ``world`` (its kind's view class), commands applied at once."""
     gateway = RobotGateway(world.robot(name))
-    return gateway.view_class(LiveState(gateway), DirectSink(world, gateway))
+    return gateway.view_class(LiveState(gateway), DirectSink(world))
 
 
 
