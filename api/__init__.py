@@ -1,0 +1,1 @@
+"""marsupial.api: the plug-in contract between the world, the runtime and the skills (no simulator imports)."""
