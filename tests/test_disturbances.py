@@ -14,10 +14,10 @@ from marsupial.trees.mission import parse_mission
 from marsupial.world import World, WorldError
 from marsupial.world.disturbances import DisturbanceSchedule, When, apply_disturbances
 from marsupial.world.errors import UnknownNameError
-from marsupial.world.wind import GustyWind
 from marsupial.world.robots.base import Robot, yaw_of
 from marsupial.world.sensors.base import SensorConfig
 from marsupial.world.sensors.camera import OPTICAL_DOWN, Camera, Intrinsics
+from marsupial.world.wind import GustyWind
 
 TAG_ID = 7
 TAGS = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_APRILTAG_36h11)

@@ -59,9 +59,15 @@ def test_alias_expansion_is_bounded(tmp_path):
 def test_deep_nesting_is_refused_with_a_location(tmp_path):
     deep = "tree: " + "{sequence: [" * 100 + "{skill: wait}" + "]}" * 100 + "\n"
     path = mission_file(tmp_path, BASE.replace("tree:\n  skill: wait\n  params: {seconds: 0.5}\n", deep))
-    assert_bad_input(marsupial("tree", str(path)), "m.yaml:5:", "nested deeper than 64 levels")
-    with pytest.raises(MissionError, match="nested deeper than 64 levels"):
+    # the 65th level starts at the 33rd '{sequence: [' (two levels each) of line 5, column 7 + 32 * 12
+    assert_bad_input(marsupial("tree", str(path)), "m.yaml:5:391:", "nested deeper than 64 levels")
+    with pytest.raises(MissionError, match="nested deeper than 64 levels") as caught:  # the composer's recursion
         load_mission(mission_file(tmp_path, "tree: " + "[" * 5000 + "]" * 5000, "deeper.yaml"))
+    assert caught.value.location.endswith("deeper.yaml:1:71")  # the 65th '[' (the first is level 1, column 7)
+    block = "tree:\n" + "".join("  " * i + "- sequence:\n" for i in range(40)) + "  " * 40 + "- {skill: wait}\n"
+    with pytest.raises(MissionError, match="nested deeper than 64 levels") as caught:
+        load_mission(mission_file(tmp_path, block, "block.yaml"))
+    assert caught.value.location.endswith("block.yaml:33:65")  # block style: the key whose value is level 65
 
 
 @pytest.mark.parametrize(
