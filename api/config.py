@@ -209,7 +209,8 @@ class QuadrotorOptions(ConfigModel):
 
     battery_soc: Probability = Field(1.0, description="Initial state of charge (0-1).")
     motors_on: bool | None = Field(
-        None, description="Whether the motors start on; none: on unless the robot starts stored or on the ground."
+        None, description="Whether the motors start on (hovering at the pose); none: on when it starts above its "
+        "landed height."
     )
     battery_capacity_mAh: float | None = Field(
         None, gt=0, le=1e6, description="Capacity of the pack (mAh) in place of the kind's."
