@@ -91,8 +91,8 @@ def draw_layout(spec: DecoyEntry, rng: np.random.Generator, numbers: dict[str, i
     placed: list[Decoy] = []
     for kind, widths, heights in wanted:
         for _ in range(MAX_DRAWS):
-            w, h = rng.uniform(*widths), rng.uniform(*heights)
-            depth = rng.uniform(*spec.recess_depth) if kind == "recess" else thickness
+            w, h = rng.uniform(widths[0], widths[1]), rng.uniform(heights[0], heights[1])
+            depth = rng.uniform(spec.recess_depth[0], spec.recess_depth[1]) if kind == "recess" else thickness
             lo_x, hi_x = spec.x[0] + spec.gap + w / 2, spec.x[1] - spec.gap - w / 2
             lo_z, hi_z = spec.z[0] + spec.gap + h / 2, spec.z[1] - spec.gap - h / 2
             if lo_x > hi_x or lo_z > hi_z:

@@ -132,7 +132,10 @@ def _field_type(model: type[BaseModel], name: Any) -> Any:
     field = model.model_fields.get(name)
     if field is None:
         return Any
-    return Annotated[(field.annotation, *field.metadata)] if field.metadata else field.annotation
+    if not field.metadata:
+        return field.annotation
+    annotated = (field.annotation, *field.metadata)
+    return Annotated[annotated]
 
 
 def walk_location(loc: tuple[Any, ...], root: Any, data: Any) -> _LocWalk:
