@@ -39,6 +39,7 @@ FORBIDDEN_MODULES = (
     "marsupial.world.contacts",
     "marsupial.world.scoring",
     "marsupial.world.disturbances",
+    "marsupial.world.wind",
     "marsupial.world.estimation",
 )
 FORBIDDEN_ATTRIBUTES = frozenset({"world", "body_id", "client_id", "cid", "_robot", "bullet"})
