@@ -18,6 +18,7 @@ from typing import get_args
 import pytest
 
 import marsupial.api.config as config
+from marsupial.trees.errors import MissionError
 from marsupial.trees.mission import load_mission, mission_dir, mission_schema
 from marsupial.trees.mission.validation import tag_map
 from marsupial.trees.runner import build_world
@@ -124,3 +125,14 @@ def test_docs_document_every_mission_key():
     for model in models:
         own = set(vars(model).get("__annotations__", {})) & set(model.model_fields)
         assert any(own <= table for table in tables), f"docs/missions.md has no table of {model.__name__}: {own}"
+
+
+def test_overrides_know_the_keys_of_the_robot_kind():
+    overrides = {"team.uav.options.motors_on": "true", "team.uav.sensors.sonar.rate_hz": "10",
+                 "world.disturbances.wind.gust": "2"}
+    mission = load_mission("demo_hover", overrides)  # sections the file leaves out are made
+    assert mission.spec.team["uav"].constructor_options() == {"motors_on": True, "sensors": {"sonar": {"rate_hz": 10}}}
+    assert mission.spec.world.disturbances.given() == {"wind": {"gust": 2.0}}
+    with pytest.raises(MissionError, match="expected one of team.uav.options.battery_capacity_mAh, "
+                                           "team.uav.options.battery_soc, team.uav.options.motors_on; did you mean"):
+        load_mission("demo_hover", {"team.uav.options.motor_on": "true"})
