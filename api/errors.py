@@ -4,10 +4,18 @@ from __future__ import annotations
 
 import difflib
 from collections.abc import Iterable
+from typing import Any
 
 
 class WorldError(Exception):
-    """Base class of every error the world raises for bad user input."""
+    """Base class of every error the world raises for bad user input.
+
+    ``at`` is the key path of the bad value within the configuration the world
+    was given, where it is known (``("occlusion", 1, "link")`` under a mission's
+    ``world.disturbances``); ``()`` otherwise.
+    """
+
+    at: tuple[Any, ...] = ()
 
 
 class UnknownNameError(WorldError, KeyError):

@@ -73,6 +73,7 @@ from bench_common import (
 )
 from page_merge import merge_section, merge_target_row
 
+from marsupial.api.config import Disturbances
 from marsupial.skills.aperture import DetectionParams, ProfileParams, detect_apertures, mav_contour, profile_analysis
 from marsupial.skills.aperture.detection import ApertureCandidate, eye_in_hand_frame
 from marsupial.skills.aperture.profile import LaunchConfiguration
@@ -185,7 +186,7 @@ def wall_truth(seed: int, mission: Path = MISSION) -> dict[str, list[Zone]]:
     """
     spec = load_mission(mission).spec.world
     with World(scene=spec.scene, seed=seed) as world:
-        apply_disturbances(world, {"decoys": spec.disturbances["decoys"]}, where="world.disturbances")
+        apply_disturbances(world, Disturbances(decoys=spec.disturbances.decoys))
         return {"aperture": world.scene.zones_tagged("aperture"), "decoy": world.scene.zones_tagged("decoy")}
 
 
@@ -424,7 +425,7 @@ def plot_fig5(rk: dict[str, Any], img: Path) -> str:
     example = next((r for r in rows if r["decoys_detected"]), rows[0])
     with World(scene="collapsed_mockup", seed=example["seed"]) as world:
         spec = load_mission(MISSION).spec.world
-        apply_disturbances(world, {"decoys": spec.disturbances["decoys"]})
+        apply_disturbances(world, Disturbances(decoys=spec.disturbances.decoys))
         _, rgb = facing_frames(world, 0.0, OVERVIEW_STANDOFF_M, 1)[0]
     fig, axes = plt.subplots(3, 1, figsize=(11, 12), gridspec_kw={"height_ratios": [1.3, 1, 1]})
     axes[0].imshow(rgb)

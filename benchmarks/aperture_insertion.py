@@ -25,6 +25,7 @@ from typing import Any
 
 from bench_common import campaign
 
+from marsupial.api.config import Disturbances
 from marsupial.trees.campaign import wilson_interval
 from marsupial.trees.mission import load_mission
 from marsupial.trees.replay import read_log
@@ -71,7 +72,7 @@ def fit_truth(shape: str, seed: int, mission: Path = MISSION) -> dict[str, Any]:
     """
     spec = load_mission(mission, overrides_for(shape, mission)).spec.world
     with World(scene=spec.scene, seed=seed) as world:
-        made = apply_disturbances(world, {"aperture_fit": spec.disturbances["aperture_fit"]}).aperture_fit
+        made = apply_disturbances(world, Disturbances(aperture_fit=spec.disturbances.aperture_fit)).aperture_fit
     assert made is not None
     x0, z0, x1, z1 = made.opening.bounds
     return {
@@ -191,11 +192,13 @@ def insertion_trials(runs: Path, trials: int, workers: int) -> dict[str, Any]:
         wall += sum(r["wall_time"] for r in records)
         rows += [score_trial(r, shape) for r in records]
     total = _tally(rows)
+    fit = load_mission(MISSION).spec.world.disturbances.aperture_fit
+    assert fit is not None, f"{MISSION} has no aperture_fit entry"
     return {
         "mission": str(MISSION.relative_to(HERE.parent)),
         "start": mms.pose,
         "pose_spread": mms.pose_spread,
-        "clearance_range_m": load_mission(MISSION).spec.world.disturbances["aperture_fit"]["clearance"],
+        "clearance_range_m": list(fit.clearance_range),
         "per_shape": per_shape,
         **total,
         "rate": total["successes"] / len(rows) if rows else 0.0,

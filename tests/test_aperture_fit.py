@@ -17,11 +17,14 @@ from click.testing import CliRunner
 from shapely import affinity
 from shapely.geometry import Polygon
 
-from marsupial.api.errors import UnknownNameError, WorldError
+from marsupial.api.config import ApertureFitEntry
+from marsupial.api.errors import UnknownNameError
 from marsupial.api.silhouette import mav_silhouette
 from marsupial.trees.cli import cli
+from marsupial.trees.errors import MissionError
+from marsupial.trees.mission import parse_mission
 from marsupial.world import World
-from marsupial.world.aperture_fit import ApertureFitSpec
+from marsupial.world.aperture_fit import draw_fit
 from marsupial.world.apertures import aperture_outline
 from marsupial.world.disturbances import apply_disturbances
 
@@ -75,34 +78,43 @@ def test_the_rectangle_is_scaled_by_the_analytic_factor():
 
 
 def test_the_shape_and_the_clearance_follow_the_seed():
-    spec = ApertureFitSpec(("orthogonal", "collapsed", "amoeba", "u"), (0.01, 0.03))
+    entry = ApertureFitEntry(shape=["orthogonal", "collapsed", "amoeba", "u"], clearance=[0.01, 0.03])
     draws = []
     for seed in (3, 3, 4):
         with World(scene=None, seed=seed) as world:
-            draws.append(spec.draw(world.rng_for("disturbance/aperture_fit")))
+            draws.append(draw_fit(entry, world.rng_for("disturbance/aperture_fit")))
     assert draws[0] == draws[1] != draws[2]
     assert all(0.01 <= c <= 0.03 for _, c in draws)
 
 
-@pytest.mark.parametrize(("entry", "error", "match"), [
-    ({"shape": "amoeba", "clearance": [0.03, 0.01]}, WorldError, r"aperture_fit\.clearance: expected"),
-    ({"shape": "amoeba", "clearance": 0}, WorldError, r"aperture_fit\.clearance"),
-    ({"shape": "amoeba", "clearance": "2 cm"}, WorldError, r"aperture_fit\.clearance: expected a number"),
-    ({"shape": "amoeba", "clearance": 0.5}, WorldError, r"<= 0\.1"),
-    ({"shape": [], "clearance": 0.02}, WorldError, r"aperture_fit\.shape"),
-    ({"shape": "amoeb", "clearance": 0.02}, UnknownNameError, "Did you mean 'amoeba'"),
-    ({"shape": "amoeba"}, WorldError, r"missing key\(s\) \['clearance'\]"),
-    ({"shape": "amoeba", "clearance": 0.02, "size": 1}, WorldError, r"unknown key\(s\) \['size'\]"),
+@pytest.mark.parametrize(("entry", "message"), [
+    ("{shape: amoeba, clearance: [0.03, 0.01]}",
+     "m.yaml:4:48: world.disturbances.aperture_fit.clearance: [low, high] = [0.03, 0.01] is decreasing; "
+     "expected [low, high] with low <= high"),
+    ("{shape: amoeba, clearance: 0}", "aperture_fit.clearance: invalid value 0; expected a value > 0"),
+    ("{shape: amoeba, clearance: 2 cm}", "aperture_fit.clearance: invalid value '2 cm'; expected a number or a list"),
+    ("{shape: amoeba, clearance: 0.5}", "aperture_fit.clearance: invalid value 0.5; expected a value <= 0.1"),
+    ("{shape: [], clearance: 0.02}", "aperture_fit.shape: invalid value []; expected at least 1 item(s)"),
+    ("{shape: amoeba}", "m.yaml:4:18: world.disturbances.aperture_fit.clearance: missing required key 'clearance'"),
+    ("{shape: amoeba, clearance: 0.02, size: 1}", "aperture_fit.size: unknown key 'size'; expected one of clearance, "
+     "shape"),
 ])
-def test_bad_entries_are_refused_naming_the_key(entry, error, match):
-    with World(scene="collapsed_mockup", seed=0) as world, pytest.raises(error, match=match):
-        apply_disturbances(world, {"aperture_fit": entry})
+def test_bad_entries_are_refused_at_their_line(entry, message):
+    with pytest.raises(MissionError) as caught:
+        parse_mission(f"mission: m\nworld:\n  scene: collapsed_mockup\n  disturbances: {{aperture_fit: {entry}}}\n"
+                      "tree: {idle: true}\n", "m.yaml")
+    assert message in str(caught.value)
+
+
+def test_an_unknown_shape_lists_the_scenes_apertures():
+    with World(scene="collapsed_mockup", seed=0) as world, pytest.raises(UnknownNameError, match="mean 'amoeba'"):
+        apply_disturbances(world, {"aperture_fit": {"shape": "amoeb", "clearance": 0.02}})
 
 
 def test_decoys_and_a_tight_aperture_are_not_made_in_one_world():
-    with World(scene="collapsed_mockup", seed=0) as world, pytest.raises(WorldError, match="one or the other"):
-        apply_disturbances(world, {"aperture_fit": {"shape": "u", "clearance": 0.02},
-                                   "decoys": {"wall": "mockup_wall_1", "x": [-2.2, -1.1], "z": [0.45, 1.25]}})
+    with pytest.raises(MissionError, match="aperture_fit or decoys, not both"):
+        parse_mission("mission: m\nworld:\n  disturbances:\n    aperture_fit: {shape: u, clearance: 0.02}\n"
+                      "    decoys: {wall: mockup_wall_1, x: [-2.2, -1.1], z: [0.45, 1.25]}\ntree: {idle: true}\n")
 
 
 def test_a_mission_with_a_bad_entry_exits_2_at_its_line():
@@ -110,5 +122,5 @@ def test_a_mission_with_a_bad_entry_exits_2_at_its_line():
                                       "--set", "world.disturbances.aperture_fit.clearance=[0.03, 0.01]"],
                                 env={"COLUMNS": "200"})
     assert result.exit_code == 2, result.output
-    assert "aperture_insertion.yaml:17:" in result.stderr and "aperture_fit.clearance" in result.stderr
+    assert "aperture_insertion.yaml:18:35:" in result.stderr and "aperture_fit.clearance" in result.stderr
     assert "Traceback" not in result.output

@@ -6,14 +6,19 @@ import cv2
 import numpy as np
 import pybullet
 import pytest
+from pydantic import ValidationError
 
+from marsupial.api.config import WindConfig
 from marsupial.api.errors import UnknownNameError
 from marsupial.api.model import Intrinsics
+from marsupial.trees.errors import MissionError
+from marsupial.trees.mission import parse_mission
 from marsupial.world import World, WorldError
-from marsupial.world.disturbances import DisturbanceSchedule, GustyWind, When, apply_disturbances
+from marsupial.world.disturbances import DisturbanceSchedule, When, apply_disturbances
 from marsupial.world.robots.base import Robot, yaw_of
 from marsupial.world.sensors.base import SensorConfig
 from marsupial.world.sensors.camera import OPTICAL_DOWN, Camera
+from marsupial.world.wind import GustyWind
 
 TAG_ID = 7
 TAGS = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_APRILTAG_36h11)
@@ -90,7 +95,7 @@ def _tag_seen(camera):
 
 def _gusts(seed, times):
     with World(seed=seed) as world:
-        wind = GustyWind(world, steady=(1.0, 0.0, 0.0), gust=3.0, gust_period_s=2.0)
+        wind = GustyWind(world, WindConfig(steady=[1.0, 0.0, 0.0], gust=3.0, gust_period_s=2.0))
         return np.array([wind.velocity(t, np.zeros(3)) for t in times])
 
 
@@ -107,9 +112,9 @@ def test_gusts_are_a_deterministic_function_of_seed_and_time():
 
 def test_gust_peaks_match_the_setting_and_gusts_fill_half_the_time():
     with World(seed=2) as world:
-        wind = GustyWind(
-            world, steady=(1.0, -0.5, 0.0), gust=3.0, gust_period_s=2.0, gust_gap_s=2.0, gust_elevation_deg=10.0
-        )
+        wind = GustyWind(world, WindConfig(
+            steady=[1.0, -0.5, 0.0], gust=3.0, gust_period_s=2.0, gust_gap_s=2.0, gust_elevation_deg=10.0
+        ))
         times = np.arange(0.0, 800.0, 0.02)
         gust = np.array([wind.velocity(t, np.array([5.0, 0.0, 1.0])) for t in times]) - [1.0, -0.5, 0.0]
     speed = np.linalg.norm(gust, axis=1)
@@ -232,55 +237,68 @@ def test_video_latency_delays_readings_by_the_configured_time(tmp_path):
 
 
 # ------------------------------------------------------------ validation
+def _mission_error(disturbances: str) -> str:
+    """The error of a mission whose ``world.disturbances`` is the flow mapping ``disturbances`` (on line 4)."""
+    text = ("mission: m\nteam: {uav: {robot: bebop2}, rig: {robot: summit_xl}}\nworld:\n"
+            f"  disturbances: {disturbances}\ntree: {{idle: true}}\n")
+    with pytest.raises(MissionError) as caught:
+        parse_mission(text, "m.yaml")
+    return str(caught.value)
+
+
 @pytest.mark.parametrize(
     ("spec", "message"),
     [
-        (
-            {"wind": {"stedy": [1, 0, 0]}},
-            r"world.wind: unknown key\(s\) \['stedy'\]; expected some of \['steady', 'gust'",
-        ),
-        ({"gusts": 3}, r"world: unknown key\(s\) \['gusts'\]; expected some of \['wind', 'occlusion'"),
-        ({"wind": {"gust": "strong"}}, r"world.wind.gust: expected a number, got str 'strong'"),
-        ({"wind": {"steady": [1, 0]}}, r"world.wind.steady: expected \[vx, vy, vz\]"),
-        (
-            {"occlusion": [{"robot": "uav", "start": "ten"}]},
-            r"world.occlusion\[0\].start: expected a number, got str 'ten'",
-        ),
-        ({"occlusion": {"link": "link0"}}, r"world.occlusion: missing key\(s\) \['robot'\]"),
-        ({"occlusion": "uav"}, r"world.occlusion: expected a mapping or a list of mappings, got str"),
-        (
-            {"occlusion": {"robot": "uav", "rate_hz": 0.1}},
-            r"world.occlusion: random windows \(rate_hz\) need a duration",
-        ),
-        ({"occlusion": {"robot": "uav", "stop": 5}}, r"world.occlusion.stop: only random windows"),
-        (
-            {"frame_drops": {"camera": "rig/eye", "probability": 1.5}},
-            r"world.frame_drops.probability: expected a number within \[0.0, 1.0\], got 1.5",
-        ),
-        ({"video_latency": {"camera": "rig/eye", "seconds": 0.2, "every": 3}}, r"unknown key\(s\) \['every'\]"),
-        ({"video_latency": {"camera": "eye", "seconds": 0.2}}, r"a camera is named 'robot/sensor'"),
-        ({"kidnap": {"robot": "uav", "pose": [0, 0, 0]}}, r"world.kidnap: missing key\(s\) \['at'\]"),
-        (
-            {"kidnap": [{"robot": "uav", "at": -1.0, "pose": [0, 0, 0]}]},
-            r"world.kidnap\[0\].at: expected a number >= 0.0, got -1.0",
-        ),
-        (
-            {"kidnap": {"robot": "uav", "at": 1.0, "pose": [0, 0]}},
-            r"world.kidnap.pose: expected \[x, y, yaw\] or \[x, y, z, yaw\] \(m, rad, world frame\), got \[0, 0\]",
-        ),
-        ({"kidnap": {"robot": "uav", "at": 1.0, "pose": [0, "a", 0]}}, r"world.kidnap.pose\[1\]: expected a number"),
-        (
-            {"kidnap": {"robot": "uav", "at": 1.0, "pose": [0, 0, 0], "spread": [0.1, -0.1, 0]}},
-            r"world.kidnap.spread\[1\]: expected a number >= 0.0, got -0.1",
-        ),
-        ({"kidnap": {"robot": "uav", "at": 1.0, "pose": [0, 0, 0], "when": 3}}, r"unknown key\(s\) \['when'\]"),
+        ("{wind: {stedy: [1, 0, 0]}}", "m.yaml:4:25: world.disturbances.wind.stedy: unknown key 'stedy'; expected one "
+         "of gust, gust_elevation_deg, gust_gap_s, gust_period_s, steady; did you mean 'steady'?"),
+        ("{gusts: 3}", "m.yaml:4:18: world.disturbances.gusts: unknown key 'gusts'; expected one of aperture_fit, "
+         "decoys, frame_drops, kidnap, occlusion, video_latency, wind"),
+        ("{wind: {gust: strong}}", "world.disturbances.wind.gust: invalid value 'strong'; expected a number"),
+        ("{wind: {gust: true}}", "world.disturbances.wind.gust: invalid value True; expected a number"),
+        ("{wind: {gust: .nan}}", "world.disturbances.wind.gust: invalid value nan; expected a finite number"),
+        ("{wind: {gust_period_s: 1e-300}}", "wind.gust_period_s: invalid value 1e-300; expected a value >= 0.1"),
+        ("{wind: {steady: [1, 0]}}", "world.disturbances.wind.steady: invalid value [1, 0]; expected at least 3"),
+        ("{occlusion: [{robot: uav, start: ten}]}",
+         "m.yaml:4:43: world.disturbances.occlusion[0].start: invalid value 'ten'; expected a number"),
+        ("{occlusion: {link: link0}}", "world.disturbances.occlusion.robot: missing required key 'robot'"),
+        ("{occlusion: uav}", "world.disturbances.occlusion: invalid value 'uav'; expected a list"),
+        ("{occlusion: {robot: uav, rate_hz: 0.1}}", "world.disturbances.occlusion.rate_hz: random windows (rate_hz) "
+         "need a duration; expected duration (s) beside rate_hz"),
+        ("{occlusion: {robot: uav, stop: 5}}", "world.disturbances.occlusion.stop: only random windows"),
+        ("{occlusion: {robot: uav, rate_hz: 1, duration: 1, start: 5, stop: 2}}",
+         "world.disturbances.occlusion.stop: stop 2.0 s comes before start 5.0 s; expected stop >= start"),
+        ("{occlusion: {robot: uva}}", "m.yaml:4:30: world.disturbances.occlusion.robot: unknown robot 'uva'; "
+         "expected a team member (one of rig, uav); did you mean 'uav'?"),
+        ("{frame_drops: {camera: rig/eye, probability: 1.5}}",
+         "world.disturbances.frame_drops.probability: invalid value 1.5; expected a value <= 1"),
+        ("{video_latency: {camera: rig/eye, seconds: 0.2, every: 3}}", "video_latency.every: unknown key 'every'"),
+        ("{video_latency: {camera: eye, seconds: 0.2}}",
+         "video_latency.camera: 'eye' does not name a sensor; expected 'robot/sensor' (e.g. carrier/eye_in_hand)"),
+        ("{frame_drops: {camera: rg/eye, probability: 0.1}}", "frame_drops.camera: unknown robot 'rg'"),
+        ("{kidnap: {robot: uav, pose: [0, 0, 0]}}", "world.disturbances.kidnap.at: missing required key 'at'"),
+        ("{kidnap: [{robot: uav, at: -1.0, pose: [0, 0, 0]}]}",
+         "world.disturbances.kidnap[0].at: invalid value -1.0; expected a value >= 0"),
+        ("{kidnap: {robot: uav, at: 1.0, pose: [0, 0]}}", "kidnap.pose: invalid value [0, 0]; expected at least 3"),
+        ("{kidnap: {robot: uav, at: 1.0, pose: [0, a, 0]}}", "kidnap.pose[1]: invalid value 'a'; expected a number"),
+        ("{kidnap: {robot: uav, at: 1.0, pose: [0, 0, 0], spread: [0.1, -0.1, 0]}}",
+         "world.disturbances.kidnap.spread[1]: invalid value -0.1; expected a value >= 0"),
+        ("{kidnap: {robot: uav, at: true, pose: [0, 0, 0]}}", "kidnap.at: invalid value True; expected a number"),
+        ("{decoys: {wall: w, x: [1, 0], z: [0, 1]}}",
+         "decoys.x: [low, high] = [1.0, 0.0] is not increasing; expected [low, high] with low < high"),
+        ("{decoys: {wall: w, x: [0, 1], z: [0, 1], holes: 1.5}}", "decoys.holes: invalid value 1.5; expected an "
+         "integer"),
+        ("{decoys: {wall: w, x: [0, 1], z: [0, 1], holes: 1000000}}", "decoys.holes: invalid value 1000000; "
+         "expected a value <= 100"),
     ],
 )
-def test_bad_specs_name_what_was_expected(tmp_path, spec, message):
-    with World() as world:
-        _marker_scene(world, tmp_path, size=(16, 12))
-        with pytest.raises(WorldError, match=message):
-            apply_disturbances(world, spec)
+def test_bad_entries_are_refused_at_their_line_when_the_mission_loads(spec, message):
+    assert message in _mission_error(spec)
+
+
+def test_a_mapping_from_python_is_validated_by_the_same_models():
+    with World() as world, pytest.raises(ValidationError, match="gust_period_s"):
+        apply_disturbances(world, {"wind": {"gust_period_s": 0.0}})
+    assert not isinstance(world.wind, GustyWind)
 
 
 def test_unknown_names_list_the_known_ones(tmp_path):

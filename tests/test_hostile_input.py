@@ -59,9 +59,15 @@ def test_alias_expansion_is_bounded(tmp_path):
 def test_deep_nesting_is_refused_with_a_location(tmp_path):
     deep = "tree: " + "{sequence: [" * 100 + "{skill: wait}" + "]}" * 100 + "\n"
     path = mission_file(tmp_path, BASE.replace("tree:\n  skill: wait\n  params: {seconds: 0.5}\n", deep))
-    assert_bad_input(marsupial("tree", str(path)), "m.yaml:5:", "nested deeper than 64 levels")
-    with pytest.raises(MissionError, match="nested deeper than 64 levels"):
+    # the 65th level starts at the 33rd '{sequence: [' (two levels each) of line 5, column 7 + 32 * 12
+    assert_bad_input(marsupial("tree", str(path)), "m.yaml:5:391:", "nested deeper than 64 levels")
+    with pytest.raises(MissionError, match="nested deeper than 64 levels") as caught:  # the composer's recursion
         load_mission(mission_file(tmp_path, "tree: " + "[" * 5000 + "]" * 5000, "deeper.yaml"))
+    assert caught.value.location.endswith("deeper.yaml:1:71")  # the 65th '[' (the first is level 1, column 7)
+    block = "tree:\n" + "".join("  " * i + "- sequence:\n" for i in range(40)) + "  " * 40 + "- {skill: wait}\n"
+    with pytest.raises(MissionError, match="nested deeper than 64 levels") as caught:
+        load_mission(mission_file(tmp_path, block, "block.yaml"))
+    assert caught.value.location.endswith("block.yaml:33:65")  # block style: the key whose value is level 65
 
 
 @pytest.mark.parametrize(
@@ -105,6 +111,69 @@ def test_a_start_pose_beyond_a_kilometre_is_refused(tmp_path, value):
 def test_booleans_and_strings_are_not_numbers(tmp_path, where, text):
     path = mission_file(tmp_path, BASE.replace(where, text))
     assert_bad_input(marsupial("tree", str(path)), "expected a number")
+
+
+TYPED = """\
+mission: typed
+world:
+  disturbances:
+    wind: {gust: .nan, gusty: 2}
+    occlusion: {robot: uav, start: true}
+    kidnap: {robot: uav, at: 1.0, pose: [0, 0, none]}
+team:
+  uav: {robot: bebop2, pose: [0, 0, 1, 0], sensors: {sonar: {rate_hz: .inf}}, options: {battery_soc: false}}
+  ugv: {robot: summit_xl, options: {limits: {max_sped: 1.0}, localization: 3}}
+tree: {idle: true}
+"""
+
+
+def test_typed_sections_refuse_each_bad_value_at_its_line(tmp_path):
+    # wrong type, unknown key, NaN and booleans for numbers, in the disturbances, sensor settings and options
+    result = marsupial("tree", str(mission_file(tmp_path, TYPED)))
+    assert_bad_input(
+        result,
+        "m.yaml:4:12: world.disturbances.wind.gust: invalid value nan; expected a finite number",
+        "m.yaml:4:24: world.disturbances.wind.gusty: unknown key 'gusty'; expected one of gust, gust_elevation_deg, "
+        "gust_gap_s, gust_period_s, steady; did you mean 'gust'?",
+        "m.yaml:5:29: world.disturbances.occlusion.start: invalid value True; expected a number",
+        "m.yaml:6:48: world.disturbances.kidnap.pose[2]: invalid value 'none'; expected a number",
+        "m.yaml:8:62: team.uav.sensors.sonar.rate_hz: invalid value inf; expected a finite number",
+    )
+    assert "… and 3 more errors" in result.stderr  # the team's: at most 5 are listed
+    team = TYPED.split("team:")[1]
+    result = marsupial("tree", str(mission_file(tmp_path, "mission: typed\nteam:" + team, "team.yaml")))
+    assert_bad_input(
+        result,
+        "team.yaml:3:89: team.uav.options.battery_soc: invalid value False; expected a number",
+        "team.yaml:4:46: team.ugv.options.limits.max_sped: unknown key 'max_sped'",
+        "did you mean 'max_speed'?",
+        "team.yaml:4:62: team.ugv.options.localization: invalid value 3; expected 'odometry' or 'map'",
+    )
+
+
+@pytest.mark.parametrize(("entry", "message"), [
+    ("{robot: bebop2, options: {motors_on: false}, sensors: {lidar: {}}}",
+     "m.yaml:3:63: team.uav.sensors.lidar: unknown key 'lidar'; expected one of barometer, battery, flow, "
+     "front_camera, imu, sonar"),
+    ("{robot: husky}", "m.yaml:3:9: team.uav.robot: unknown robot 'husky'; expected one of ardrone2, bebop2, "
+     "child_ugv, mms, mobile_manipulator, mother_ugv, summit_xl, tello"),
+    ("{pose: [0, 0, 1, 0]}", "m.yaml:3:3: team.uav.robot: missing required key 'robot'; expected one of ardrone2"),
+    ("{robot: summit_xl, sensors: {lidar: {}}}",
+     "m.yaml:3:27: team.uav.sensors: unknown key 'sensors'; expected one of options, pose"),
+])
+def test_robot_kinds_take_their_own_options_and_sensors(tmp_path, entry, message):
+    path = mission_file(tmp_path, BASE.replace("{robot: bebop2, pose: [0, 0, 1, 0]}", entry))
+    with pytest.raises(MissionError) as caught:
+        load_mission(path)
+    assert message in str(caught.value)
+
+
+def test_a_disturbance_the_built_world_cannot_resolve_exits_2_at_its_line(tmp_path):
+    disturbances = "world: {disturbances: {occlusion: [{robot: uav}, {robot: uav, link: tag_bundel}]}}\nrun:"
+    path = mission_file(tmp_path, BASE.replace("run:", disturbances))
+    assert_bad_input(marsupial("run", str(path), "--no-log", "-q"),
+                     "m.yaml:4:63: world.disturbances.occlusion[1].link: unknown link of bebop2 'tag_bundel'",
+                     "did you mean 'tag_bundle'?")
 
 
 @pytest.mark.parametrize("until", ["-5", "nan", "inf"])

@@ -96,7 +96,7 @@ def test_guards_need_exactly_one_condition_key():
 
 
 def test_unknown_robot_and_carrier_suggest_team_members():
-    team = "team:\n  carrier: {robot: husky}\n  uav: {robot: bebop2, stored_on: carier}\n"
+    team = "team:\n  carrier: {robot: mobile_manipulator}\n  uav: {robot: bebop2, stored_on: carier}\n"
     error = error_of(f"mission: m\n{team}tree: {{skill: a}}\n")
     assert error.location == "bad.yaml:4:24" and error.suggestion == "carrier"
     team = team.replace("carier", "carrier")

@@ -1,7 +1,9 @@
 """Property: any mutation of a valid mission gives a located error (exit 2) or a valid run — never a crash or hang.
 
-Hypothesis takes the shipped ``demo_hover`` mission, replaces one value at
-a random key path (or adds a key) with a hostile value — NaN, infinities,
+Hypothesis takes the shipped ``demo_hover`` mission (and a mission with every
+typed section the world reads: robot options, sensor settings, disturbances,
+mutated in those sections), replaces one value at a random key path (or adds
+a key) with a hostile value — NaN, infinities,
 booleans, strings, negative and huge numbers, empty or nested containers,
 control characters — and then loads, compiles and runs the result for a
 short simulated time. Allowed outcomes: a :class:`MissionError` whose text
@@ -28,7 +30,7 @@ from marsupial.trees.replay import read_log
 from marsupial.trees.runner import run_mission
 
 SOURCE = Path(marsupial.missions.__file__).resolve().parent / "demo_hover.yaml"
-VALID = yaml.safe_load(SOURCE.read_text())
+TYPED = Path(__file__).parent / "data" / "missions" / "typed_sections.yaml"
 LOCATED = re.compile(r"^[^\n]+\.yaml:\d+:\d+: ")
 OUTCOMES = {"success", "failure", "time_limit"}
 
@@ -54,11 +56,12 @@ def key_paths(value: Any, path: tuple = ()) -> list[tuple]:
     return paths
 
 
-PATHS = key_paths(VALID)
+PATHS = key_paths(yaml.safe_load(SOURCE.read_text()))
+TYPED_PATHS = [p for p in key_paths(yaml.safe_load(TYPED.read_text())) if p[0] in ("world", "team")]
 
 
-def mutated(path: tuple, value: Any, add_key: bool) -> dict:
-    data = yaml.safe_load(SOURCE.read_text())
+def mutated(source: Path, path: tuple, value: Any, add_key: bool) -> dict:
+    data = yaml.safe_load(source.read_text())
     parent = data
     for key in path[:-1]:
         parent = parent[key]
@@ -74,24 +77,45 @@ def to_yaml(data: dict) -> str:
     return yaml.safe_dump(data, sort_keys=False, allow_unicode=True, width=10_000)
 
 
-@settings(
+FUZZ = settings(
     max_examples=25,
     deadline=None,
     derandomize=True,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
 )
-@given(path=st.sampled_from(PATHS), value=HOSTILE, add_key=st.booleans())
-def test_a_mutated_mission_fails_located_or_runs(tmp_path_factory, path, value, add_key):
-    folder = tmp_path_factory.mktemp("fuzz")
+
+
+def fails_located_or_runs(folder: Path, data: dict, what: str) -> None:
+    """Load and run ``data`` for at most 1 simulated second: a located error, or a run that ends without a crash."""
     mission_path = folder / "mutant.yaml"
-    mission_path.write_text(to_yaml(mutated(path, value, add_key)))
+    mission_path.write_text(to_yaml(data))
     try:
         mission = load_mission(mission_path)
         result = run_mission(
             mission, until=min(mission.spec.run.until or 1.0, 1.0), log_path=folder / "run.mcap", progress=False
         )
     except MissionError as err:
-        assert LOCATED.match(str(err)), f"{path}={value!r}: unlocated error {err}"
+        assert LOCATED.match(str(err)), f"{what}: unlocated error {err}"
         return
-    assert result.outcome in OUTCOMES, (path, value, result.outcome, result.message)  # no crash in a skill
+    assert result.outcome in OUTCOMES, (what, result.outcome, result.message)  # no crash in a skill
     assert read_log(folder / "run.mcap").outcome == result.outcome
+
+
+@FUZZ
+@given(path=st.sampled_from(PATHS), value=HOSTILE, add_key=st.booleans())
+def test_a_mutated_mission_fails_located_or_runs(tmp_path_factory, path, value, add_key):
+    data = mutated(SOURCE, path, value, add_key)
+    fails_located_or_runs(tmp_path_factory.mktemp("fuzz"), data, f"{path}={value!r}")
+
+
+@FUZZ
+@given(path=st.sampled_from(TYPED_PATHS), value=HOSTILE, add_key=st.booleans())
+def test_a_mutated_typed_section_fails_located_or_runs(tmp_path_factory, path, value, add_key):
+    data = mutated(TYPED, path, value, add_key)
+    fails_located_or_runs(tmp_path_factory.mktemp("fuzz"), data, f"{path}={value!r}")
+
+
+def test_the_unmutated_missions_run(tmp_path):
+    for source in (SOURCE, TYPED):
+        fails_located_or_runs(tmp_path, yaml.safe_load(source.read_text()), source.name)
+        assert read_log(tmp_path / "run.mcap").outcome in OUTCOMES  # ran, not refused

@@ -125,11 +125,11 @@ def build_world(mission: Mission, seed: int, gui: bool = False) -> World:
     try:
         _add_team(mission, world)
         _store_team(mission, world)
-        if spec.world.disturbances:
+        if spec.world.disturbances.given():
             try:
-                apply_disturbances(world, spec.world.disturbances, where="world.disturbances")
+                apply_disturbances(world, spec.world.disturbances)
             except WorldError as err:
-                raise _located(mission, ("world", "disturbances"), err) from None
+                raise _located(mission, ("world", "disturbances", *err.at), err) from None
     except BaseException:
         world.close()
         raise
@@ -139,7 +139,7 @@ def build_world(mission: Mission, seed: int, gui: bool = False) -> World:
 def _add_team(mission: Mission, world: World) -> None:
     """Add the mission's team robots to ``world`` at their poses, with their sensors and options."""
     for name, member in mission.spec.team.items():
-        options: dict[str, Any] = dict(member.options)
+        options = member.constructor_options()
         if member.pose_spread is not None:
             spread = member.pose_spread
             if member.pose is None or len(spread) != 3 or min(spread) < 0:
@@ -148,8 +148,6 @@ def _add_team(mission: Mission, world: World) -> None:
             options["pose"] = list(spread_pose(member.pose, spread, world.rng_for(f"team/{name}/pose")))
         elif member.pose is not None:
             options["pose"] = member.pose
-        if member.sensors:
-            options["sensors"] = member.sensors
         try:
             world.add_robot(member.robot, name, **options)
         except (WorldError, TypeError, ValueError) as err:

@@ -35,13 +35,33 @@ _FLOAT_TAG = "tag:yaml.org,2002:float"
 _MERGE_TAG = "tag:yaml.org,2002:merge"
 
 
+class _TooDeep(Exception):
+    """A node nested deeper than :data:`MAX_DEPTH` levels, found while composing; ``mark`` is where it starts."""
+
+    def __init__(self, mark: yaml.Mark):
+        super().__init__(mark)
+        self.mark = mark
+
+
 class _Loader(yaml.SafeLoader):
-    """Safe loader with YAML 1.2 booleans and exponent floats without a dot (``1e3``)."""
+    """Safe loader with YAML 1.2 booleans and exponent floats without a dot (``1e3``), refusing to compose a
+    node nested deeper than :data:`MAX_DEPTH` levels (the composer recurses once per level)."""
 
     yaml_implicit_resolvers = {
         first: [(tag, regexp) for tag, regexp in resolvers if tag != _BOOL_TAG]
         for first, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()
     }
+    _depth = -1  # nesting level of the node being composed (the document's root: 0)
+
+    def compose_node(self, parent: yaml.Node | None, index: Any) -> yaml.Node | None:
+        """Compose one node, raising :class:`_TooDeep` at the first node past :data:`MAX_DEPTH` levels."""
+        self._depth += 1
+        try:
+            if self._depth > MAX_DEPTH:
+                raise _TooDeep(self.peek_event().start_mark)  # type: ignore[no-untyped-call]
+            return super().compose_node(parent, index)
+        finally:
+            self._depth -= 1
 
 
 _Loader.add_implicit_resolver(_BOOL_TAG, re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF"))
@@ -139,27 +159,29 @@ def _check_keys(loader: _Loader, node: yaml.MappingNode, path: tuple[Any, ...], 
         seen[key] = key_node
 
 
+def _too_large(what: str, doc: SourceDoc, mark: yaml.Mark, path: tuple[Any, ...] = ()) -> MissionError:
+    """The error for a document that is too large (``what``), at ``mark``: where the limit was passed."""
+    line, column = _position(mark)
+    return MissionError(
+        f"document too large: {what}",
+        doc.file,
+        line,
+        column,
+        path,
+        expected=f"at most {MAX_VALUES:,} values and {MAX_DEPTH} levels (a mission needs far fewer)",
+    )
+
+
 def _build(loader: _Loader, node: yaml.Node, path: tuple[Any, ...], doc: SourceDoc, budget: list[int]) -> Any:
     """Plain value of ``node``, recording positions under ``path``; duplicate keys are errors.
 
     ``budget`` holds the number of values still allowed (:data:`MAX_VALUES`, shared by the whole document).
     """
     budget[0] -= 1
-    if budget[0] < 0 or len(path) > MAX_DEPTH:
-        line, column = _position(node.start_mark)
-        what = (
-            f"more than {MAX_VALUES:,} values after alias expansion"
-            if budget[0] < 0
-            else f"nested deeper than {MAX_DEPTH} levels"
-        )
-        raise MissionError(
-            f"document too large: {what}",
-            doc.file,
-            line,
-            column,
-            path,
-            expected=f"at most {MAX_VALUES:,} values and {MAX_DEPTH} levels (a mission needs far fewer)",
-        )
+    if budget[0] < 0:
+        raise _too_large(f"more than {MAX_VALUES:,} values after alias expansion", doc, node.start_mark, path)
+    if len(path) > MAX_DEPTH:  # an alias expanded below a deep node
+        raise _too_large(f"nested deeper than {MAX_DEPTH} levels", doc, node.start_mark, path)
     if isinstance(node, yaml.MappingNode):
         _check_keys(loader, node, path, doc)
         loader.flatten_mapping(node)  # resolve YAML merge keys (<<: *anchor)
@@ -192,14 +214,8 @@ def load_yaml(text: str, file: str = "<string>") -> SourceDoc:
             doc.data = _build(loader, root, (), doc, [MAX_VALUES])
     except yaml.YAMLError as exc:
         raise _parse_error(exc, doc.file) from None
-    except RecursionError:  # the YAML composer recurses per nesting level
-        raise MissionError(
-            f"document too large: nested deeper than {MAX_DEPTH} levels",
-            doc.file,
-            None,
-            None,
-            expected=f"at most {MAX_DEPTH} levels of nesting",
-        ) from None
+    except _TooDeep as exc:
+        raise _too_large(f"nested deeper than {MAX_DEPTH} levels", doc, exc.mark) from None
     finally:
         loader.dispose()
     return doc

@@ -69,6 +69,8 @@ from .rim_contacts import RIM_TAG
 from .scene import Zone
 
 if TYPE_CHECKING:
+    from marsupial.api.config import ApertureFitEntry
+
     from .scene import Scene
     from .world import World
 
@@ -85,8 +87,6 @@ SCALE_TOLERANCE = 1e-3
 """Bisection of the scale factor k stops at this relative width (about 0.1 mm on a 0.1 m opening)."""
 INSCRIBED_TOLERANCE_M = 1e-5
 """Tolerance (m) of the largest inscribed circle (shapely's ``maximum_inscribed_circle``)."""
-CLEARANCE_MAX_M = 0.1
-"""Largest clearance (m) an entry may ask for (chosen: a roomy opening is no test of a tight fit)."""
 FRAME_M = 0.03
 """Width (m) of the window of convex prisms about the opening's bounding box; boxes cover the rest of the wall."""
 WALL_MARGIN_M = 0.05
@@ -224,23 +224,12 @@ def scale_to_clearance(
 
 
 # ------------------------------------------------------------ the entry
-@dataclass(frozen=True)
-class ApertureFitSpec:
-    """What a ``world.disturbances.aperture_fit`` entry asks for.
-
-    Attributes:
-        shapes: the shape classes to draw from (openings ``aperture_<shape>`` of the scene), uniformly.
-        clearance: ``(low, high)`` (m) the clearance is drawn from, uniformly (``low == high``: that clearance).
-    """
-
-    shapes: tuple[str, ...]
-    clearance: tuple[float, float]
-
-    def draw(self, rng: np.random.Generator) -> tuple[str, float]:
-        """The shape class and the clearance (m) of one world, drawn from ``rng`` in that order."""
-        shape = self.shapes[int(rng.integers(len(self.shapes)))]
-        low, high = self.clearance
-        return shape, float(rng.uniform(low, high)) if high > low else low
+def draw_fit(entry: ApertureFitEntry, rng: np.random.Generator) -> tuple[str, float]:
+    """The shape class and the clearance (m) of one world, drawn uniformly from ``entry``'s with ``rng``, in that
+    order (a clearance range with ``low == high`` gives that clearance)."""
+    shape = entry.shapes[int(rng.integers(len(entry.shapes)))]
+    low, high = entry.clearance_range
+    return shape, float(rng.uniform(low, high)) if high > low else low
 
 
 @dataclass(frozen=True)
@@ -262,13 +251,13 @@ class ApertureFit:
     fit: MavFit
 
 
-def fit_aperture(world: World, spec: ApertureFitSpec, rng: np.random.Generator) -> ApertureFit:
-    """Give ``world``'s scene the tight aperture ``spec`` draws from ``rng`` (module docstring); returns it.
+def fit_aperture(world: World, entry: ApertureFitEntry, rng: np.random.Generator) -> ApertureFit:
+    """Give ``world``'s scene the tight aperture ``entry`` draws from ``rng`` (module docstring); returns it.
 
     :class:`WorldError` when the scene has no such aperture or wall, or the scaled opening leaves the wall.
     """
     scene = world.scene
-    shape, clearance = spec.draw(rng)
+    shape, clearance = draw_fit(entry, rng)
     zone = scene.zone(f"aperture_{shape}")
     centre = (float(zone.center[0]), float(zone.center[2]))
     k, opening = scale_to_clearance(aperture_outline(shape, scene.name), centre, clearance)

@@ -44,21 +44,14 @@ from marsupial.api.errors import WorldError
 from .scene import Zone
 
 if TYPE_CHECKING:
+    from marsupial.api.config import DecoyEntry
+
     from .scene import SceneObject
     from .world import World
 
-Range = tuple[float, float]
-
 MAV_SQUARE_M = 0.0945
-"""Side (m) of the smallest square the Tello's nose-first outline (0.0926 × 0.041 m) fits in, turned by 45°."""
-RECESS_WIDTH_M: Range = (0.15, 0.32)
-RECESS_HEIGHT_M: Range = (0.10, 0.24)
-RECESS_DEPTH_M: Range = (0.01, 0.04)
-"""Depth of a recess's back behind the face (m): below the detection's d_C = 0.05 m (``DetectionParams``)."""
-HOLE_SIDE_M: Range = (0.03, 0.09)
-"""Width and height of a hole (m), each drawn from this range: below :data:`MAV_SQUARE_M`."""
-GAP_M = 0.06
-"""Least wall (m) between two decoys and between a decoy and the ends of its range (chosen)."""
+"""Side (m) of the smallest square the Tello's nose-first outline (0.0926 × 0.041 m) fits in, turned by 45°; the
+default hole sides (:data:`marsupial.api.config.HOLE_SIDE_M`) stay below it."""
 MAX_DRAWS = 500  # rejection-sampling attempts per decoy before the layout is declared impossible
 
 
@@ -88,23 +81,7 @@ class Decoy:
         return (self.x - self.width / 2, self.x + self.width / 2, self.z - self.height / 2, self.z + self.height / 2)
 
 
-@dataclass(frozen=True)
-class DecoySpec:
-    """What one ``decoys`` entry asks for (module docstring); ranges are ``(low, high)`` in metres."""
-
-    wall: str
-    x: Range
-    z: Range
-    recesses: int = 0
-    holes: int = 0
-    recess_width: Range = RECESS_WIDTH_M
-    recess_height: Range = RECESS_HEIGHT_M
-    recess_depth: Range = RECESS_DEPTH_M
-    hole_size: Range = HOLE_SIDE_M
-    gap: float = GAP_M
-
-
-def draw_layout(spec: DecoySpec, rng: np.random.Generator, numbers: dict[str, int], thickness: float) -> list[Decoy]:
+def draw_layout(spec: DecoyEntry, rng: np.random.Generator, numbers: dict[str, int], thickness: float) -> list[Decoy]:
     """The decoys of ``spec``: recesses first, then holes, each placed at random clear of the others.
 
     ``numbers`` counts the decoys of each kind made so far (labels go on from it; updated); ``thickness``
@@ -115,8 +92,8 @@ def draw_layout(spec: DecoySpec, rng: np.random.Generator, numbers: dict[str, in
     placed: list[Decoy] = []
     for kind, widths, heights in wanted:
         for _ in range(MAX_DRAWS):
-            w, h = rng.uniform(*widths), rng.uniform(*heights)
-            depth = rng.uniform(*spec.recess_depth) if kind == "recess" else thickness
+            w, h = rng.uniform(widths[0], widths[1]), rng.uniform(heights[0], heights[1])
+            depth = rng.uniform(spec.recess_depth[0], spec.recess_depth[1]) if kind == "recess" else thickness
             lo_x, hi_x = spec.x[0] + spec.gap + w / 2, spec.x[1] - spec.gap - w / 2
             lo_z, hi_z = spec.z[0] + spec.gap + h / 2, spec.z[1] - spec.gap - h / 2
             if lo_x > hi_x or lo_z > hi_z:
@@ -162,7 +139,7 @@ def wall_pieces(extent: tuple[float, float, float, float], openings: Sequence[tu
     return [(a, b, lo, hi) for a, b, solid in slabs for lo, hi in solid if hi - lo > 1e-9 and b - a > 1e-9]
 
 
-def cut_decoys(world: World, spec: DecoySpec, rng: np.random.Generator, numbers: dict[str, int]) -> list[Decoy]:
+def cut_decoys(world: World, spec: DecoyEntry, rng: np.random.Generator, numbers: dict[str, int]) -> list[Decoy]:
     """Cut the decoys of ``spec`` into its wall in ``world``'s scene: the wall rebuilt around them, zones added.
 
     :class:`WorldError` for a wall that is not an unrotated box or ranges outside it.

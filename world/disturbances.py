@@ -1,7 +1,8 @@
 """Disturbances of a run: gusty wind, marker occlusion, camera frame drops, video latency and kidnapping.
 
-A mission's ``world:`` section lists them and :func:`apply_disturbances`
-installs them::
+A mission's ``world.disturbances`` section lists them (validated when the
+mission loads as :class:`marsupial.api.config.Disturbances`, whose fields
+document every key and unit) and :func:`apply_disturbances` installs them::
 
     wind: {steady: [1, 0, 0], gust: 3.0, gust_period_s: 2.0}
     occlusion:
@@ -17,117 +18,40 @@ Every entry except ``wind``, ``kidnap`` (an instant, not a window), ``decoys`` a
 geometry, there from the start) is on during time windows (simulated seconds,
 :class:`When`): one window ``start`` .. ``start + duration`` (default: from 0
 for ever) or, with ``rate_hz``, a seeded random train of windows of
-``duration`` s. Every random draw comes from ``world.rng_for("disturbance/…")``,
+``duration`` s. The wind is :mod:`.wind`'s, the decoys :mod:`.decoys`' and the
+tight aperture :mod:`.aperture_fit`'s; this module schedules the windows and
+kidnaps. Every random draw comes from ``world.rng_for("disturbance/…")``,
 so a run is reproducible for its seed and adding one disturbance does not
 change what another draws.
 """
 
 from __future__ import annotations
 
-import bisect
+import contextlib
 import math
 import sys
 import weakref
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pybullet
 
+from marsupial.api.config import Disturbances, Window
 from marsupial.api.errors import UnknownNameError, WorldError
 
-from .aperture_fit import CLEARANCE_MAX_M, ApertureFit, ApertureFitSpec, check_shapes, fit_aperture
-from .decoys import DecoySpec, cut_decoys
+from .aperture_fit import ApertureFit, check_shapes, fit_aperture
+from .decoys import cut_decoys
 from .kidnap import Kidnap, spread_pose, teleport
+from .wind import GustyWind
 
 if TYPE_CHECKING:
     from .robots.base import Robot
     from .sensors.base import Sensor
     from .world import World
 
-DISTURBANCE_KEYS = ("wind", "occlusion", "frame_drops", "video_latency", "kidnap", "decoys", "aperture_fit")
-"""Keys of a mission's ``world:`` section that :func:`apply_disturbances` handles."""
-
 _NEVER = sys.maxsize  # physics step of a change that never comes
-
-
-# ------------------------------------------------------------------- wind
-class GustyWind:
-    """Air velocity (m/s, world frame): a steady wind plus a seeded train of discrete gusts.
-
-    Each gust blows for ``gust_period_s`` = T along a random direction ``d``
-    (azimuth uniform, elevation uniform within ±``gust_elevation_deg``) with
-    the "1 − cosine" discrete-gust profile of MIL-F-8785C
-
-        v_gust(τ) = A · (1 − cos(2π τ / T)) / 2 · d,   0 ≤ τ ≤ T,
-
-    which peaks at exactly ``A = gust`` (m/s) at τ = T / 2. Calm spells
-    between gusts are exponential with mean ``gust_gap_s`` (default T), so
-    gusts never overlap. The field is uniform in space (robots of a mission
-    fly within metres of each other, inside one gust) and a pure function of
-    simulated time and the world seed: the gust train is drawn lazily, in time
-    order, from ``world.rng_for("disturbance/wind")``, so every query pattern
-    sees the same wind. Quadrotors read it each physics step through
-    ``world.wind.velocity(t, position)``; a call costs a few microseconds.
-    """
-
-    def __init__(
-        self,
-        world: World,
-        steady: Sequence[float] = (0.0, 0.0, 0.0),
-        gust: float = 0.0,
-        gust_period_s: float = 2.0,
-        gust_gap_s: float | None = None,
-        gust_elevation_deg: float = 10.0,
-    ):
-        self.steady = np.array(steady, dtype=float).reshape(3)
-        self._steady = tuple(float(v) for v in self.steady)
-        self.gust_amplitude = float(gust)
-        self.gust_period_s = float(gust_period_s)
-        self.gust_gap_s = self.gust_period_s if gust_gap_s is None else float(gust_gap_s)
-        self._max_elevation = math.radians(gust_elevation_deg)
-        if self.gust_amplitude < 0 or self.gust_period_s <= 0 or self.gust_gap_s <= 0:
-            raise ValueError("gust must be >= 0 m/s; gust_period_s and gust_gap_s must be > 0 s")
-        self._rng = world.rng_for("disturbance/wind")
-        self._starts: list[float] = []  # start time (s) of each gust drawn so far
-        self._directions: list[tuple[float, float, float]] = []  # unit vector (world frame) of each gust
-        self._drawn_until = 0.0  # end (s) of the last gust drawn
-
-    def velocity(self, t: float, position: np.ndarray) -> np.ndarray:
-        """Air velocity (m/s, world frame) at simulated time ``t`` (s); uniform in ``position``."""
-        speed, i = self._gust_at(t)
-        if speed == 0.0:
-            return self.steady.copy()
-        (sx, sy, sz), (dx, dy, dz) = self._steady, self._directions[i]
-        return np.array((sx + speed * dx, sy + speed * dy, sz + speed * dz))
-
-    def gust(self, t: float) -> np.ndarray:
-        """The gust part of the wind (m/s, world frame) at time ``t`` (s): zero between gusts."""
-        speed, i = self._gust_at(t)
-        return speed * np.array(self._directions[i]) if speed > 0.0 else np.zeros(3)
-
-    def _gust_at(self, t: float) -> tuple[float, int]:
-        """Gust speed (m/s) at ``t`` and the index of the gust blowing (meaningless when the speed is 0)."""
-        if self.gust_amplitude == 0.0 or t < 0.0:
-            return 0.0, 0
-        while self._drawn_until <= t:
-            self._draw_next_gust()
-        i = bisect.bisect_right(self._starts, t) - 1
-        tau = t - self._starts[i] if i >= 0 else self.gust_period_s
-        if tau >= self.gust_period_s:
-            return 0.0, 0
-        return 0.5 * self.gust_amplitude * (1.0 - math.cos(2.0 * math.pi * tau / self.gust_period_s)), i
-
-    def _draw_next_gust(self) -> None:
-        start = self._drawn_until + self._rng.exponential(self.gust_gap_s)
-        azimuth = self._rng.uniform(0.0, 2.0 * math.pi)
-        elevation = self._rng.uniform(-self._max_elevation, self._max_elevation)
-        self._starts.append(start)
-        self._directions.append(
-            (math.cos(elevation) * math.cos(azimuth), math.cos(elevation) * math.sin(azimuth), math.sin(elevation))
-        )
-        self._drawn_until = start + self.gust_period_s
 
 
 # ---------------------------------------------------------------- windows
@@ -145,6 +69,12 @@ class When:
     duration: float = math.inf
     rate_hz: float | None = None
     stop: float = math.inf
+
+    @classmethod
+    def of(cls, window: Window) -> When:
+        """The windows a validated entry asks for (its ``start``, ``duration``, ``rate_hz`` and ``stop``, s)."""
+        duration = math.inf if window.duration is None else window.duration
+        return cls(window.start, duration, window.rate_hz, math.inf if window.stop is None else window.stop)
 
     def __post_init__(self) -> None:
         if self.start < 0 or not self.duration > 0:
@@ -378,81 +308,95 @@ class DisturbanceSchedule:
 
 
 # ------------------------------------------------------------ entry point
-def apply_disturbances(world: World, spec: dict[str, Any], where: str = "world") -> DisturbanceSchedule:
-    """Install the disturbances of a mission's ``world:`` section (keys :data:`DISTURBANCE_KEYS`).
+Installer = tuple[tuple[Any, ...], Callable[..., object], tuple[Any, ...]]
+"""(key path of the entry, schedule method, its arguments after the schedule) of one windowed disturbance or kidnap."""
 
-    ``wind`` replaces ``world.wind`` with a :class:`GustyWind`; ``kidnap``
-    entries (``robot``, ``at`` s, ``pose``, optional ``spread``) are
-    :meth:`DisturbanceSchedule.kidnap` calls; ``decoys`` entries are cut into the scene's walls at once
-    (:func:`~.decoys.cut_decoys`, entry ``i`` drawing from ``world.rng_for("disturbance/decoys/<i>")``); an
-    ``aperture_fit`` entry rebuilds the aperture wall at once (:func:`~.aperture_fit.fit_aperture`, drawing from
-    ``world.rng_for("disturbance/aperture_fit")``; the schedule's ``aperture_fit`` holds what it made); the
-    other keys (one entry or a list of entries) go to the world's
-    :class:`DisturbanceSchedule`, which is returned. Bad input raises
-    :class:`WorldError` naming the entry (``where`` prefixes the path, e.g.
-    ``world.occlusion[1].start``), the unknown keys or the expected type;
-    unknown robots, links and cameras raise :class:`UnknownNameError`.
+
+def apply_disturbances(world: World, disturbances: Disturbances | Mapping[str, Any]) -> DisturbanceSchedule:
+    """Install a mission's ``world.disturbances`` (docs/world.md §7) in ``world``; returns its schedule.
+
+    ``disturbances`` is the validated :class:`~marsupial.api.config.Disturbances`
+    (a mapping is validated first: pydantic's ``ValidationError`` names the bad
+    key). ``wind`` replaces ``world.wind`` with a :class:`GustyWind`; ``decoys``
+    entries are cut into the scene's walls at once (entry ``i`` drawing from
+    ``world.rng_for("disturbance/decoys/<i>")``); an ``aperture_fit`` entry
+    rebuilds the aperture wall at once (drawing from
+    ``world.rng_for("disturbance/aperture_fit")``; the schedule's
+    ``aperture_fit`` holds what it made); the windowed entries and kidnaps go
+    to the world's :class:`DisturbanceSchedule`. Names only a built world knows
+    (robots, links, sensors, walls, aperture shapes) are resolved before
+    anything changes, so a bad one leaves the world untouched: it raises
+    :class:`UnknownNameError` (listing the known names) or :class:`WorldError`,
+    whose ``at`` is the key path of the bad value under ``world.disturbances``
+    (e.g. ``("occlusion", 1, "link")``).
     """
-    _check_keys(where, spec, DISTURBANCE_KEYS)
-    # validate everything first: a bad entry leaves the world untouched
-    wind = _wind(world, f"{where}.wind", spec["wind"]) if "wind" in spec else None
-    effects: list[tuple[Callable[..., object], tuple[Any, ...]]] = []
-    for i, entry in _entries(where, "occlusion", spec):
-        path = f"{where}.occlusion{i}"
-        _check_keys(path, entry, ("robot", "link", *_WHEN_KEYS), required=("robot",))
-        robot = world.robot(_text(path, "robot", entry["robot"]))
-        link = _text(path, "link", entry["link"]) if "link" in entry else None
-        if link is not None:
-            robot.link_index(link)  # unknown link: the error lists the robot's links
-        effects.append((DisturbanceSchedule.occlude, (robot, link, _when(path, entry))))
-    for i, entry in _entries(where, "frame_drops", spec):
-        path = f"{where}.frame_drops{i}"
-        _check_keys(path, entry, ("camera", "probability", *_WHEN_KEYS), required=("camera", "probability"))
-        sensor = find_sensor(world, _text(path, "camera", entry["camera"]))
-        probability = _number(path, "probability", entry["probability"], 0.0, 1.0)
-        effects.append((DisturbanceSchedule.drop_frames, (sensor, probability, _when(path, entry))))
-    for i, entry in _entries(where, "video_latency", spec):
-        path = f"{where}.video_latency{i}"
-        _check_keys(path, entry, ("camera", "seconds", *_WHEN_KEYS), required=("camera", "seconds"))
-        sensor = find_sensor(world, _text(path, "camera", entry["camera"]))
-        seconds = _number(path, "seconds", entry["seconds"], 0.0)
-        effects.append((DisturbanceSchedule.delay, (sensor, seconds, _when(path, entry))))
-    for i, entry in _entries(where, "kidnap", spec):
-        path = f"{where}.kidnap{i}"
-        _check_keys(path, entry, ("robot", "at", "pose", "spread"), required=("robot", "at", "pose"))
-        robot = world.robot(_text(path, "robot", entry["robot"]))
-        at = _number(path, "at", entry["at"], 0.0)
-        pose = _numbers(path, "pose", entry["pose"], (3, 4), "[x, y, yaw] or [x, y, z, yaw] (m, rad, world frame)")
-        spread = _numbers(path, "spread", entry.get("spread", [0.0, 0.0, 0.0]), (3,), "[dx, dy, dyaw] (m, rad)", 0.0)
-        effects.append((DisturbanceSchedule.kidnap, (robot, at, pose, spread)))
-    decoys, fit = _geometry(world, where, spec)
-    if wind is not None:
-        world.wind = wind
-    made = _rebuild(world, decoys, fit)
+    spec = disturbances if isinstance(disturbances, Disturbances) else Disturbances.model_validate(disturbances)
+    installers = _installers(world, spec)
+    for i, decoy in enumerate(spec.decoys):
+        with _at("decoys", i, "wall"):
+            world.scene.object(decoy.wall)  # unknown wall: the error lists the objects
+    if spec.aperture_fit is not None:
+        with _at("aperture_fit", "shape"):
+            check_shapes(world.scene, spec.aperture_fit.shapes)  # unknown shape: the error lists the apertures
+    if spec.wind is not None:
+        world.wind = GustyWind(world, spec.wind)
+    made = _rebuild(world, spec)
     schedule = DisturbanceSchedule.of(world)
     if made is not None:
         schedule.aperture_fit = made
-    for add, args in effects:
-        add(schedule, *args)
+    for path, add, args in installers:
+        with _at(*path):
+            add(schedule, *args)
     return schedule
 
 
-def _geometry(world: World, where: str, spec: dict[str, Any]) -> tuple[list[DecoySpec], ApertureFitSpec | None]:
-    """The scene changes of ``spec``, checked: its ``decoys`` entries and its ``aperture_fit`` entry (not both)."""
-    decoys = [_decoys(world, f"{where}.decoys{i}", entry) for i, entry in _entries(where, "decoys", spec)]
-    fit = _aperture_fit(world, f"{where}.aperture_fit", spec["aperture_fit"]) if "aperture_fit" in spec else None
-    if fit is not None and decoys:
-        raise WorldError(f"{where}: aperture_fit rebuilds the whole aperture wall, decoys cut into one of its boxes: "
-                         "give one or the other")
-    return decoys, fit
+def _installers(world: World, spec: Disturbances) -> list[Installer]:
+    """The windowed disturbances and kidnaps of ``spec``, their robots, links and sensors resolved in ``world``."""
+    installers: list[Installer] = []
+    for i, occlusion in enumerate(spec.occlusion):
+        with _at("occlusion", i, "robot"):
+            robot = world.robot(occlusion.robot)
+        if occlusion.link is not None:
+            with _at("occlusion", i, "link"):
+                robot.link_index(occlusion.link)  # unknown link: the error lists the robot's links
+        installers.append((("occlusion", i), DisturbanceSchedule.occlude, (robot, occlusion.link, When.of(occlusion))))
+    for i, drops in enumerate(spec.frame_drops):
+        with _at("frame_drops", i, "camera"):
+            sensor = find_sensor(world, drops.camera)
+        installers.append((("frame_drops", i), DisturbanceSchedule.drop_frames, (sensor, drops.probability,
+                                                                                  When.of(drops))))
+    for i, latency in enumerate(spec.video_latency):
+        with _at("video_latency", i, "camera"):
+            sensor = find_sensor(world, latency.camera)
+        installers.append((("video_latency", i), DisturbanceSchedule.delay, (sensor, latency.seconds,
+                                                                              When.of(latency))))
+    for i, kidnap in enumerate(spec.kidnap):
+        with _at("kidnap", i, "robot"):
+            robot = world.robot(kidnap.robot)
+        installers.append((("kidnap", i), DisturbanceSchedule.kidnap, (robot, kidnap.at, kidnap.pose, kidnap.spread)))
+    return installers
 
 
-def _rebuild(world: World, decoys: list[DecoySpec], fit: ApertureFitSpec | None) -> ApertureFit | None:
-    """Make the checked scene changes (:func:`_geometry`), each from its own seeded stream; the tight aperture."""
+def _rebuild(world: World, spec: Disturbances) -> ApertureFit | None:
+    """Make the scene changes of ``spec`` (decoys, a tight aperture), each from its own seeded stream."""
     numbers: dict[str, int] = {}
-    for index, decoy_spec in enumerate(decoys):
-        cut_decoys(world, decoy_spec, world.rng_for(f"disturbance/decoys/{index}"), numbers)
-    return fit_aperture(world, fit, world.rng_for("disturbance/aperture_fit")) if fit is not None else None
+    for index, decoy in enumerate(spec.decoys):
+        with _at("decoys", index):
+            cut_decoys(world, decoy, world.rng_for(f"disturbance/decoys/{index}"), numbers)
+    if spec.aperture_fit is None:
+        return None
+    with _at("aperture_fit"):
+        return fit_aperture(world, spec.aperture_fit, world.rng_for("disturbance/aperture_fit"))
+
+
+@contextlib.contextmanager
+def _at(*path: Any) -> Iterator[None]:
+    """Prefix the key path ``at`` of a :class:`WorldError` raised inside with ``path`` (the entry being installed)."""
+    try:
+        yield
+    except WorldError as err:
+        err.at = path + err.at
+        raise
 
 
 def find_sensor(world: World, path: str) -> Sensor:
@@ -466,143 +410,3 @@ def find_sensor(world: World, path: str) -> Sensor:
             return robot.sensors[key]
     known = [k if "/" in k else f"{robot_name}/{k}" for k in robot.sensors]
     raise UnknownNameError(f"sensor of {robot_name}", path, known)
-
-
-# ------------------------------------------------------------- validation
-_WHEN_KEYS = ("start", "duration", "rate_hz", "stop")
-_WIND_KEYS = ("steady", "gust", "gust_period_s", "gust_gap_s", "gust_elevation_deg")
-
-
-def _check_keys(where: str, spec: Any, allowed: Sequence[str], required: Sequence[str] = ()) -> None:
-    if not isinstance(spec, dict):
-        raise WorldError(f"{where}: expected a mapping with keys {list(allowed)}, got {type(spec).__name__} {spec!r}")
-    unknown = sorted(str(k) for k in spec if k not in allowed)
-    if unknown:
-        raise WorldError(f"{where}: unknown key(s) {unknown}; expected some of {list(allowed)}")
-    missing = [k for k in required if k not in spec]
-    if missing:
-        raise WorldError(f"{where}: missing key(s) {missing}")
-
-
-def _entries(where: str, key: str, spec: dict[str, Any]) -> Iterator[tuple[str, Any]]:
-    """The entries under ``key`` (one mapping or a list) with their index suffix for messages."""
-    value = spec.get(key)
-    if value is None:
-        return
-    if isinstance(value, dict):
-        yield "", value
-    elif isinstance(value, list):
-        for i, entry in enumerate(value):
-            yield f"[{i}]", entry
-    else:
-        raise WorldError(
-            f"{where}.{key}: expected a mapping or a list of mappings, got {type(value).__name__} {value!r}"
-        )
-
-
-def _number(where: str, key: str, value: Any, low: float | None = None, high: float | None = None) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise WorldError(f"{where}.{key}: expected a number, got {type(value).__name__} {value!r}")
-    if (low is not None and value < low) or (high is not None and value > high) or math.isnan(value):
-        bounds = f"within [{low}, {high}]" if high is not None else f">= {low}"
-        raise WorldError(f"{where}.{key}: expected a number {bounds}, got {value}")
-    return float(value)
-
-
-def _numbers(
-    where: str, key: str, value: Any, lengths: Sequence[int], what: str, low: float | None = None
-) -> list[float]:
-    if not isinstance(value, (list, tuple)) or len(value) not in lengths:
-        raise WorldError(f"{where}.{key}: expected {what}, got {value!r}")
-    return [_number(where, f"{key}[{i}]", v, low) for i, v in enumerate(value)]
-
-
-def _positive(where: str, key: str, value: Any) -> float:
-    number = _number(where, key, value, 0.0)
-    if number == 0.0:
-        raise WorldError(f"{where}.{key}: expected a number > 0, got {value}")
-    return number
-
-
-def _text(where: str, key: str, value: Any) -> str:
-    if not isinstance(value, str) or not value:
-        raise WorldError(f"{where}.{key}: expected a name (text), got {type(value).__name__} {value!r}")
-    return value
-
-
-def _when(where: str, entry: dict[str, Any]) -> When:
-    start = _number(where, "start", entry.get("start", 0.0), 0.0)
-    if "rate_hz" not in entry:
-        if "stop" in entry:
-            raise WorldError(f"{where}.stop: only random windows (with rate_hz) have a stop time; use duration")
-        duration = _positive(where, "duration", entry["duration"]) if "duration" in entry else math.inf
-        return When(start=start, duration=duration)
-    if "duration" not in entry:
-        raise WorldError(f"{where}: random windows (rate_hz) need a duration (s)")
-    stop = _number(where, "stop", entry["stop"], start) if "stop" in entry else math.inf
-    return When(
-        start=start,
-        duration=_positive(where, "duration", entry["duration"]),
-        rate_hz=_positive(where, "rate_hz", entry["rate_hz"]),
-        stop=stop,
-    )
-
-
-_DECOY_RANGES = ("recess_width", "recess_height", "recess_depth", "hole_size")
-
-
-def _decoys(world: World, where: str, entry: Any) -> DecoySpec:
-    """One ``decoys`` entry (:mod:`.decoys`), checked: the wall exists, counts are whole, ranges increasing."""
-    _check_keys(where, entry, ("wall", "x", "z", "recesses", "holes", "gap", *_DECOY_RANGES),
-                required=("wall", "x", "z"))
-    world.scene.object(_text(where, "wall", entry["wall"]))  # unknown wall: the error lists the objects
-    ranges: dict[str, tuple[float, float]] = {}
-    for key in ("x", "z", *_DECOY_RANGES):
-        if key in entry:
-            low, high = _numbers(where, key, entry[key], (2,), "[low, high] in metres")
-            if not low < high or (key != "x" and key != "z" and low <= 0):
-                raise WorldError(f"{where}.{key}: expected [low, high] with low < high (and > 0 for sizes), "
-                                 f"got {entry[key]!r}")
-            ranges[key] = (low, high)
-    counts = {}
-    for key in ("recesses", "holes"):
-        value = entry.get(key, 0)
-        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-            raise WorldError(f"{where}.{key}: expected a whole number >= 0, got {value!r}")
-        counts[key] = value
-    extra = {"gap": _number(where, "gap", entry["gap"], 0.0)} if "gap" in entry else {}
-    return DecoySpec(entry["wall"], **ranges, **counts, **extra)  # type: ignore[arg-type]
-
-
-def _aperture_fit(world: World, where: str, entry: Any) -> ApertureFitSpec:
-    """The ``aperture_fit`` entry (:mod:`.aperture_fit`), checked: known shape classes, clearances in range."""
-    _check_keys(where, entry, ("shape", "clearance"), required=("shape", "clearance"))
-    shape = entry["shape"]
-    shapes = [shape] if isinstance(shape, str) else shape
-    if not isinstance(shapes, list) or not shapes or not all(isinstance(s, str) and s for s in shapes):
-        raise WorldError(f"{where}.shape: expected a shape class (text) or a non-empty list of them, got {shape!r}")
-    check_shapes(world.scene, shapes)  # unknown shape: the error lists the scene's apertures
-    value = entry["clearance"]
-    if isinstance(value, (list, tuple)):
-        low, high = _numbers(where, "clearance", value, (2,), "[low, high] in metres")
-    else:
-        low = high = _number(where, "clearance", value)
-    if not 0.0 < low <= high <= CLEARANCE_MAX_M:
-        raise WorldError(f"{where}.clearance: expected a clearance in metres, or [low, high] with "
-                         f"0 < low <= high <= {CLEARANCE_MAX_M}, got {value!r}")
-    return ApertureFitSpec(tuple(shapes), (low, high))
-
-
-def _wind(world: World, where: str, spec: Any) -> GustyWind:
-    _check_keys(where, spec, _WIND_KEYS)
-    steady = spec.get("steady", [0.0, 0.0, 0.0])
-    if not isinstance(steady, (list, tuple)) or len(steady) != 3:
-        raise WorldError(f"{where}.steady: expected [vx, vy, vz] in m/s (world frame), got {steady!r}")
-    return GustyWind(
-        world,
-        steady=[_number(where, f"steady[{i}]", v) for i, v in enumerate(steady)],
-        gust=_number(where, "gust", spec.get("gust", 0.0), 0.0),
-        gust_period_s=_positive(where, "gust_period_s", spec.get("gust_period_s", 2.0)),
-        gust_gap_s=_positive(where, "gust_gap_s", spec["gust_gap_s"]) if "gust_gap_s" in spec else None,
-        gust_elevation_deg=_number(where, "gust_elevation_deg", spec.get("gust_elevation_deg", 10.0), 0.0, 90.0),
-    )

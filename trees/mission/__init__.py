@@ -15,6 +15,8 @@ subtree point into the subtree file); later stages report problems there with
 :meth:`Mission.error_at`.
 """
 
+from marsupial.api.config import TeamMember
+
 from .loading import (
     Mission,
     display_path,
@@ -58,7 +60,6 @@ from .spec import (
     RunSpec,
     SensingSpec,
     TeamLinkSpec,
-    TeamMember,
     WorldSpec,
 )
 from .validation import (

@@ -72,6 +72,7 @@ class Mission:
         Returns the error; the caller raises it. ``node.key_path + ("params", "speed")`` points inside a node.
         """
         source, key_path, note = self._place(where)
+        key_path = _as_written(source.data, key_path)
         lines = [text for path, text in self.reference_notes(source, note).items() if key_path[: len(path)] == path]
         lines += [note] if note else []
         return source.error(key_path, message, expected, suggestion, "; ".join(lines) or None)
@@ -100,6 +101,18 @@ def _param_origins(source: SourceDoc, params: Mapping[str, Any], overrides: Mapp
         key.removeprefix("params.").split(".")[0]: f"set by --set {key}={value}" for key, value in overrides.items()
     }
     return {name: set_by.get(name) or f"set at {source.where(('params', name))}" for name in params}
+
+
+def _as_written(data: Any, key_path: tuple[Any, ...]) -> tuple[Any, ...]:
+    """``key_path`` without the index 0 of a single mapping written where a list of them is allowed
+    (``occlusion: {…}`` for ``occlusion: [{…}]``), so that it points at the key as written."""
+    written: list[Any] = []
+    for item in key_path:
+        if item == 0 and isinstance(item, int) and isinstance(data, dict) and 0 not in data:
+            continue
+        written.append(item)
+        data = data[item] if isinstance(data, (dict, list)) and _has(data, item) else None
+    return tuple(written)
 
 
 def _has(container: dict[str, Any] | list[Any], item: Any) -> bool:

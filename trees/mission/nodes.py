@@ -13,7 +13,6 @@ from typing import Annotated, Any, ClassVar, Literal, TypeAlias, cast, get_args
 from pydantic import (
     AfterValidator,
     BaseModel,
-    BeforeValidator,
     ConfigDict,
     Discriminator,
     Field,
@@ -23,6 +22,8 @@ from pydantic import (
     model_validator,
 )
 from pydantic_core import PydanticCustomError
+
+from marsupial.api.config import OneOrList
 
 from ..errors import KeyPathLike, suggest
 from ..yaml_source import SourceDoc
@@ -174,10 +175,6 @@ class ParallelNode(_Composite):
     success_on: Literal["all", "one"] = Field("all", description="Succeed when all children or any one succeeds.")
 
 
-def _as_guard_list(value: Any) -> Any:
-    return [value] if isinstance(value, Mapping) else value
-
-
 class Guard(BaseModel):
     """Compact condition: exactly one condition key (its value is the condition's primary argument),
     plus optional `robot` and `params`, e.g. `{battery_below: 0.2, robot: uav}` or `{operator: dock}`."""
@@ -217,21 +214,12 @@ class Guard(BaseModel):
         return self._key_path
 
 
-class _OneOrList:
-    """JSON Schema of a list field that also accepts a single item (``when: {…}`` or ``when: [{…}, …]``)."""
-
-    @classmethod
-    def __get_pydantic_json_schema__(cls, core_schema: Any, handler: Callable[[Any], dict[str, Any]]) -> dict[str, Any]:
-        as_list = handler(core_schema)
-        return {"anyOf": [as_list["items"], as_list]}
-
-
 class PriorityEntry(BaseModel):
     """One entry of `priorities`: run `do` while its `when` guard(s) all hold."""
 
     model_config = ConfigDict(extra="forbid")
 
-    when: Annotated[list[Guard], BeforeValidator(_as_guard_list), _OneOrList] = Field(
+    when: OneOrList[Guard] = Field(
         default_factory=list,
         description="Guard, or list of guards that must all hold (only the last entry may omit it).",
     )

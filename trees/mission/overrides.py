@@ -13,7 +13,7 @@ from pydantic import (
 from ..errors import MissionError, one_of, suggest
 from ..yaml_source import parse_scalar
 from .spec import MissionSpec
-from .validation import tag_map, unwrap, walk_location
+from .validation import union_member, unwrap, walk_location
 
 # ------------------------------------------------------------------------ overrides
 
@@ -31,16 +31,6 @@ def _override_keys(data: Any, tp: Any) -> list[Any]:
     if isinstance(data, dict):
         return list(data)
     return []
-
-
-def _member(tp: Any, data: Any) -> Any:
-    """The member of the tagged union ``tp`` (a tree node) that ``data`` is, told by its node type key; else ``tp``."""
-    tags = tag_map(tp)
-    if isinstance(data, dict):
-        for key in data:
-            if key in tags:
-                return tags[key]
-    return tp
 
 
 def _is_mapping_type(tp: Any) -> bool:
@@ -88,7 +78,7 @@ def apply_overrides(
         for depth, part in enumerate(parts):
             if isinstance(target, list) and part.lstrip("-").isdigit():
                 part = parts[depth] = int(part)
-            tp = _member(tp, target)
+            tp = union_member(tp, target)
             allowed = _override_keys(target, tp) if isinstance(target, (dict, list)) else []
             if part not in allowed:
                 prefix = ".".join(str(p) for p in parts[:depth])

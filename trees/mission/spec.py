@@ -1,4 +1,7 @@
 """The top-level keys of a mission: world (sensing, disturbances), team, operator, plugins, params, run, tree.
+
+The sections the world consumes (team members' options and sensor settings,
+disturbances) are the models of :mod:`marsupial.api.config`.
 """
 
 from __future__ import annotations
@@ -14,6 +17,8 @@ from pydantic import (
 )
 from pydantic_core import PydanticCustomError
 
+from marsupial.api.config import Disturbances, TeamMember
+
 from ..errors import one_of, suggest
 from .nodes import Node
 
@@ -23,7 +28,7 @@ from .nodes import Node
 class TeamLinkSpec(BaseModel):
     """The team's radio: one-way latency, its jitter, message loss and the estimate telemetry rate."""
 
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
     latency_s: float = Field(0.02, ge=0, le=5.0, description="One-way latency of a message (s).")
     jitter_s: float = Field(0.01, ge=0, le=5.0, description="Standard deviation of the extra delay (s).")
     drop: float = Field(0.02, ge=0, le=1, description="Probability that a message is lost.")
@@ -35,7 +40,7 @@ class TeamLinkSpec(BaseModel):
 class SensingSpec(BaseModel):
     """How the robots sense: one knob scaling every noise figure, and the team link."""
 
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
     noise_scale: float = Field(
         1.0,
         ge=0,
@@ -55,40 +60,9 @@ class WorldSpec(BaseModel):
     scene: str | None = Field(None, description="Scene name (world/scenes/<name>.yaml); none: an empty floor.")
     seed: int = Field(0, ge=0, le=2**63 - 1, description="Seed of all randomness in the world (an integer >= 0).")
     sensing: SensingSpec = Field(default_factory=SensingSpec)
-    disturbances: dict[str, Any] = Field(
-        default_factory=dict, description="Disturbances (wind, sensor faults, kidnaps …; docs/world.md §7)."
+    disturbances: Disturbances = Field(
+        default_factory=Disturbances, description="Disturbances (wind, sensor faults, kidnaps …; docs/world.md §7)."
     )
-
-
-MAX_POSE_VALUE = 1000.0
-"""Largest magnitude (m; rad for a yaw) of a start pose's entries and spreads: pybullet computes contacts in single
-precision, whose step at 1 km is 0.06 mm and grows with the distance."""
-
-PoseValue = Annotated[float, Field(ge=-MAX_POSE_VALUE, le=MAX_POSE_VALUE)]
-
-
-class TeamMember(BaseModel):
-    """A robot of the team: its kind, start pose and options."""
-
-    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
-    robot: str = Field(description="Robot kind (see world/robots ROBOT_KINDS).")
-    pose: list[PoseValue] | None = Field(
-        None,
-        description=(
-            "Start pose [x, y], [x, y, yaw] (ground robots) or [x, y, z, yaw] (m, rad, world frame), each within "
-            "±1000."
-        ),
-    )
-    pose_spread: list[PoseValue] | None = Field(
-        None,
-        description=(
-            "[dx, dy, dyaw] >= 0 (m, m, rad): the start pose is `pose` plus a uniform offset within ± each on x, y "
-            "and yaw, drawn from the world seed (the robot's estimate starts there too)."
-        ),
-    )
-    stored_on: str | None = Field(None, description="Team member that carries this robot at the start.")
-    sensors: dict[str, Any] = Field(default_factory=dict, description="Sensor configurations by sensor name.")
-    options: dict[str, Any] = Field(default_factory=dict, description="Options passed to the robot constructor.")
 
 
 class OperatorEvent(BaseModel):
@@ -140,7 +114,8 @@ class MissionSpec(BaseModel):
     tree: Node = Field(description="The behaviour tree.")
 
     @model_validator(mode="after")
-    def _carriers_exist(self) -> MissionSpec:
+    def _team_members_exist(self) -> MissionSpec:
+        """Carriers (``stored_on``) and the robots that disturbances name are team members."""
         for name, member in self.team.items():
             others = set(self.team) - {name}
             if member.stored_on is not None and member.stored_on not in others:
@@ -151,6 +126,17 @@ class MissionSpec(BaseModel):
                         "expected": f"another team member ({one_of(others)})",
                         "suggestion": suggest(member.stored_on, others),
                         "at": ("team", name, "stored_on"),
+                    },
+                )
+        for at, robot in self.world.disturbances.robots():
+            if robot not in self.team:
+                raise PydanticCustomError(
+                    "unknown_robot",
+                    f"unknown robot '{robot}'",
+                    {
+                        "expected": f"a team member ({one_of(self.team)})",
+                        "suggestion": suggest(robot, self.team),
+                        "at": ("world", "disturbances", *at),
                     },
                 )
         return self

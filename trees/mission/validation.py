@@ -8,12 +8,13 @@ from __future__ import annotations
 
 import functools
 import types
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Annotated, Any, Literal, Union, get_args, get_origin
 
 from pydantic import (
     BaseModel,
+    Discriminator,
     Tag,
     TypeAdapter,
     ValidationError,
@@ -68,10 +69,37 @@ def tag_map(tp: Any) -> dict[str, Any]:
     return tags
 
 
+def discriminator(tp: Any) -> str | Callable[[Any], Any] | None:
+    """The discriminator of a tagged union (a field name or a function of the value), ``None`` for other types."""
+    if get_origin(tp) is Annotated:
+        for meta in get_args(tp)[1:]:
+            if isinstance(meta, Discriminator):
+                return meta.discriminator
+    return None
+
+
+def union_member(tp: Any, data: Any) -> Any:
+    """The member of the tagged union ``tp`` that ``data`` is (told by its discriminator); else ``tp``."""
+    tags, tell = tag_map(tp), discriminator(tp)
+    if isinstance(tell, str):
+        tag = data.get(tell) if isinstance(data, Mapping) else None
+    else:
+        tag = tell(data) if tell is not None else None
+    return tags.get(tag, tp) if isinstance(tag, str) else tp
+
+
+def _is_node_union(tp: Any) -> bool:
+    return set(tag_map(tp)) == set(NODE_KINDS)
+
+
 def _describe(tp: Any) -> str:
     """What a value of type ``tp`` looks like, in words ("an integer", "a node …")."""
-    if tag_map(tp):
+    if _is_node_union(tp):
         return f"a node ({one_of(tag_map(tp))})"
+    if isinstance(discriminator(tp), str):
+        return f"a mapping with {discriminator(tp)} ({one_of(tag_map(tp))})"
+    if tag_map(tp):
+        return " or ".join(_describe(member) for member in tag_map(tp).values())
     tp = unwrap(tp)
     origin = get_origin(tp)
     if origin is Literal:
@@ -99,7 +127,20 @@ class _LocWalk:
 _ABSENT = object()
 
 
+def _field_type(model: type[BaseModel], name: Any) -> Any:
+    """The declared type of field ``name`` of ``model`` with its metadata (a union's discriminator); ``Any`` if none."""
+    field = model.model_fields.get(name)
+    if field is None:
+        return Any
+    if not field.metadata:
+        return field.annotation
+    annotated = (field.annotation, *field.metadata)
+    return Annotated[annotated]
+
+
 def walk_location(loc: tuple[Any, ...], root: Any, data: Any) -> _LocWalk:
+    """A pydantic error location (or a key path) followed through the type ``root`` and the YAML value ``data``:
+    union tags dropped, a single item written without its list found at index 0."""
     path: list[Any] = []
     tp, value, model = root, data, None
     for item in loc:
@@ -111,7 +152,7 @@ def walk_location(loc: tuple[Any, ...], root: Any, data: Any) -> _LocWalk:
         origin = get_origin(tp)
         if isinstance(tp, type) and issubclass(tp, BaseModel):
             model = tp
-            tp = tp.model_fields[item].annotation if item in tp.model_fields else Any
+            tp = _field_type(tp, item)
         elif origin is list:
             tp = get_args(tp)[0]
             if item == 0 and not isinstance(value, list):  # a single item written without a list
@@ -153,12 +194,25 @@ def _show(value: Any) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
+def _union_error(walk: _LocWalk, kind: str, err: Mapping[str, Any]) -> tuple[tuple[Any, ...], str, str, str | None]:
+    """(key path, message, expected, suggestion) for a value that no member of a tagged union takes."""
+    tags, tell = tag_map(walk.annotation), discriminator(walk.annotation)
+    if _is_node_union(walk.annotation):
+        return _node_error(walk)
+    if isinstance(tell, str):  # a key of the mapping tells the member (robot: bebop2)
+        if kind == "union_tag_not_found":
+            return walk.path + (tell,), f"missing required key '{tell}'", one_of(tags), None
+        tag = err["input"][tell]
+        return walk.path + (tell,), f"unknown {tell} {_show(tag)}", one_of(tags), suggest(tag, tags)
+    return walk.path, f"invalid value {_show(err['input'])}", _describe(walk.annotation), None
+
+
 def _convert(err: Mapping[str, Any], root: Any, data: Any) -> tuple[tuple[Any, ...], str, str | None, str | None]:
     """(key path, message, expected, suggestion) of one pydantic error."""
-    walk = walk_location(tuple(err["loc"]), root, data)
     kind, ctx = err["type"], err.get("ctx") or {}
+    walk = walk_location(tuple(err["loc"]) + tuple(ctx.get("at", ())), root, data)
     if kind in ("union_tag_not_found", "union_tag_invalid"):
-        return _node_error(walk)
+        return _union_error(walk, kind, err)
     if kind == "extra_forbidden":
         key = walk.path[-1]
         known = list(walk.model.model_fields) if walk.model else []
@@ -166,7 +220,7 @@ def _convert(err: Mapping[str, Any], root: Any, data: Any) -> tuple[tuple[Any, .
     if kind == "missing":
         return walk.path, f"missing required key '{walk.path[-1]}'", _describe(walk.annotation), None
     if "expected" in ctx and kind not in _EXPECTATIONS:  # our own checks (PydanticCustomError)
-        return walk.path + tuple(ctx.get("at", ())), err["msg"], ctx["expected"], ctx.get("suggestion")
+        return walk.path, err["msg"], ctx["expected"], ctx.get("suggestion")
     if kind in _EXPECTATIONS:
         limits = {k: f"{v:g}" if isinstance(v, float) else v for k, v in ctx.items()}
         return walk.path, f"invalid value {_show(err['input'])}", _EXPECTATIONS[kind].format(**limits), None
