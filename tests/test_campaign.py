@@ -49,6 +49,7 @@ def campaign(mission, out, backend):
     return run_campaign(mission, 2, out, base_seed=3, vary={"limit": ["0.5", "30"]}, workers=2, backend=backend)
 
 
+@pytest.mark.slow
 def test_local_campaign_writes_trials_and_summary(mission, tmp_path):
     out = tmp_path / "local"
     summary = campaign(mission, out, "local")
@@ -67,6 +68,7 @@ def test_local_campaign_writes_trials_and_summary(mission, tmp_path):
     assert kept == ["trial_0000_seed_3.mcap", "trial_0001_seed_4.mcap"]
 
 
+@pytest.mark.slow
 def test_local_and_ray_backends_give_the_same_outcomes(mission, tmp_path):
     pytest.importorskip("ray", reason="Ray is an optional extra: pip install 'marsupial[ray]'")
     local = tmp_path / "local"

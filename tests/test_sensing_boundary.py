@@ -118,9 +118,12 @@ def test_the_static_check_finds_a_skill_reaching_the_world() -> None:
 
 
 SHIPPED = sorted(p.stem for p in MISSIONS_DIR.glob("*.yaml"))
+QUICK_TRAP_RUNS = {"demo_hover", "marsupial_ugv_patrol"}  # under a second each: in the fast tier too
 
 
-@pytest.mark.parametrize("mission", SHIPPED)
+@pytest.mark.parametrize(
+    "mission", [m if m in QUICK_TRAP_RUNS else pytest.param(m, marks=pytest.mark.slow) for m in SHIPPED]
+)
 def test_shipped_mission_decides_without_truth(mission: str) -> None:
     py_trees.blackboard.Blackboard.clear()
     with truth_trap() as trap:
