@@ -8,7 +8,6 @@ import tempfile
 from pathlib import Path
 
 import pytest
-
 from rich.console import Console
 
 from marsupial.trees.campaign import CampaignSpec, plan_trials, run_campaign, run_campaigns, run_trials, wilson_interval
