@@ -300,8 +300,8 @@ def run_trials(
 ) -> list[dict[str, Any]]:
     """Run ``trials``, ``workers`` at a time (every core by default); their records in the order of ``trials``.
 
-    ``workers=1`` runs them one after another in this process, more in
-    spawned local processes; ``backend="ray"`` runs them on the Ray cluster at
+    ``workers=1`` (or a single trial) runs them one after another in this
+    process, more in spawned local processes; ``backend="ray"`` runs them on the Ray cluster at
     ``address``, or on a local Ray whose session files go to ``ray_dir``. A
     progress bar with the trials done, the failures and the ETA shows when
     ``console`` is a terminal. ``on_record(position, record)`` is called as
@@ -327,11 +327,9 @@ def run_trials(
                 on_record(position, record)
             bar.update(task, advance=1, description=f"{label} ({backend}, {failures} failed)")
 
-        if not trials:
-            pass
-        elif backend == "ray":
+        if backend == "ray" and trials:
             _run_ray(trials, workers, address, ray_dir or Path("ray").resolve(), done)
-        elif workers == 1:
+        elif workers == 1 or len(trials) < 2:
             _run_serial(trials, done)
         else:
             _run_local(trials, workers, done)
