@@ -27,6 +27,7 @@ tree:
 ENCOUNTER = ROOT / "benchmarks" / "missions" / "docking_encounter.yaml"
 
 
+@pytest.mark.slow
 def test_every_benchmark_imports_as_a_module_of_the_package():
     assert {"campaign_speed", "landing", "uav_docking", "ugv_docking", "aperture", "world_speed"} <= set(SCRIPTS)
     for name in SCRIPTS:
