@@ -1,6 +1,6 @@
 """Micro-scout deployment through apertures of Arora & Papachristos, side by side with the paper: Table I, ranking.
 
-    python benchmarks/aperture.py [--quick] [--workers 2] [--runs DIR] [--scans 50] [--repeats 20] [--trials 100]
+    python benchmarks/aperture.py [--quick] [--workers N] [--runs DIR] [--scans 50] [--repeats 20] [--trials 100]
                                   [--seeds 10] [--only insertion|mission]
                                   [--out benchmarks/out/aperture.json] [--report docs/results/aperture.md]
 
@@ -57,11 +57,15 @@ from typing import Any
 
 import cv2
 import numpy as np
-from aperture_insertion import INSERTION_HEADING, insertion_lines, insertion_trials, plot_insertion
-from aperture_insertion import verdict as insertion_verdict
-from aperture_mission import MISSION_HEADING, mission_lines, mission_seeds
-from aperture_mission import verdict as mission_verdict
-from bench_common import (
+
+if not __package__:  # run as a file (python benchmarks/<name>.py): the benchmarks package from the repository
+    sys.path[0] = str(Path(__file__).resolve().parents[1])
+
+from benchmarks.aperture_insertion import INSERTION_HEADING, insertion_lines, insertion_trials, plot_insertion
+from benchmarks.aperture_insertion import verdict as insertion_verdict
+from benchmarks.aperture_mission import MISSION_HEADING, mission_lines, mission_seeds
+from benchmarks.aperture_mission import verdict as mission_verdict
+from benchmarks.bench_common import (
     campaign,
     campaign_arguments,
     conclude,
@@ -71,8 +75,7 @@ from bench_common import (
     targets_lines,
     write_report,
 )
-from page_merge import merge_section, merge_target_row
-
+from benchmarks.page_merge import merge_section, merge_target_row
 from marsupial.api.config import Disturbances
 from marsupial.skills.aperture import DetectionParams, ProfileParams, detect_apertures, mav_contour, profile_analysis
 from marsupial.skills.aperture.detection import ApertureCandidate, eye_in_hand_frame

@@ -23,8 +23,7 @@ import re
 from pathlib import Path
 from typing import Any
 
-from bench_common import campaign
-
+from benchmarks.bench_common import campaign_spec, campaigns
 from marsupial.api.config import Disturbances
 from marsupial.trees.campaign import wilson_interval
 from marsupial.trees.mission import load_mission
@@ -185,10 +184,11 @@ def insertion_trials(runs: Path, trials: int, workers: int) -> dict[str, Any]:
     per_shape = math.ceil(trials / len(SHAPES))
     mms = load_mission(MISSION).spec.team["mms"]
     rows, wall = [], 0.0
-    for shape in SHAPES:
-        out = runs / "insertion" / shape
-        campaign(str(MISSION), per_shape, out, overrides=overrides_for(shape), workers=workers)
-        records = json.loads((out / "trials.json").read_text())
+    specs = [campaign_spec(str(MISSION), per_shape, runs / "insertion" / shape, overrides=overrides_for(shape))
+             for shape in SHAPES]
+    campaigns(specs, workers)  # the trials of every shape class in one pool
+    for shape, spec in zip(SHAPES, specs, strict=True):
+        records = json.loads((spec.out / "trials.json").read_text())
         wall += sum(r["wall_time"] for r in records)
         rows += [score_trial(r, shape) for r in records]
     total = _tally(rows)

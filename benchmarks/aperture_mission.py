@@ -13,8 +13,8 @@ import json
 from pathlib import Path
 from typing import Any
 
-from bench_common import campaign
-
+from benchmarks.bench_common import campaign_spec, campaigns
+from marsupial.trees.campaign import CampaignSpec
 from marsupial.trees.replay import read_log
 
 MISSION = "aperture_scouts"
@@ -45,21 +45,23 @@ def score_run(record: dict[str, Any]) -> dict[str, Any]:
     return row
 
 
-def mission_seeds(runs: Path, seeds: int, workers: int, folder: str = "mission",
-                  overrides: dict[str, str] | None = None) -> dict[str, Any]:
-    """``seeds`` runs of the mission (seeds 0 … seeds−1, with ``--set`` ``overrides``), each scored from its log;
-    with the default overrides, also the same seeds with the paper's scout policy (:data:`PAPER_SCOUT`)."""
-    out = runs / folder
-    campaign(MISSION, seeds, out, overrides=overrides, workers=workers)
-    rows = [score_run(r) for r in json.loads((out / "trials.json").read_text())]
+def mission_seeds(runs: Path, seeds: int, workers: int) -> dict[str, Any]:
+    """``seeds`` runs of the mission (seeds 0 … seeds−1), each scored from its log, and the same seeds with the
+    paper's scout policy (:data:`PAPER_SCOUT`, under ``paper_scout``); all the trials in one pool of ``workers``."""
+    specs = [campaign_spec(MISSION, seeds, runs / "mission"),
+             campaign_spec(MISSION, seeds, runs / "mission_paper_scout", overrides=PAPER_SCOUT)]
+    campaigns(specs, workers)
+    ours, paper = (_scores(spec) for spec in specs)
+    return {**ours, "paper_scout": paper}
+
+
+def _scores(spec: CampaignSpec) -> dict[str, Any]:
+    """One campaign of the mission scored from its logs: both objects found, per scout, rim contacts, each seed."""
+    rows = [score_run(r) for r in json.loads((spec.out / "trials.json").read_text())]
     both = sum(r["both"] for r in rows)
-    result: dict[str, Any] = {
-        "mission": f"missions/{MISSION}.yaml", "set": overrides or {}, "seeds": len(rows), "both_found": both,
-        "rate": both / len(rows) if rows else 0.0, "found": {s: sum(r[s]["found"] for r in rows) for s in SCOUTS},
-        "rim_contacts": sum(r["rim_contacts"] for r in rows), "rows": rows}
-    if overrides is None:
-        result["paper_scout"] = mission_seeds(runs, seeds, workers, "mission_paper_scout", PAPER_SCOUT)
-    return result
+    return {"mission": f"missions/{MISSION}.yaml", "set": spec.overrides, "seeds": len(rows), "both_found": both,
+            "rate": both / len(rows) if rows else 0.0, "found": {s: sum(r[s]["found"] for r in rows) for s in SCOUTS},
+            "rim_contacts": sum(r["rim_contacts"] for r in rows), "rows": rows}
 
 
 def verdict(ms: dict[str, Any]) -> tuple[bool, str]:

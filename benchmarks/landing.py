@@ -1,6 +1,6 @@
 """The landing experiments of Palafox et al. (2019), side by side with the paper: Table 2, Figs. 6–11 and 13.
 
-    python benchmarks/landing.py [--quick] [--sweep] [--workers 2] [--runs DIR]
+    python benchmarks/landing.py [--quick] [--sweep] [--workers N] [--runs DIR]
                                  [--trials 5] [--cycles 50] [--sweep-cycles 10] [--reference-cycles N]
                                  [--paper-limit S] [--no-gusts]
                                  [--out benchmarks/out/landing.json] [--report docs/results/landing.md]
@@ -37,9 +37,10 @@ drifts; the platform's size is a static prior. Sensing is at its default
    its own process (each trial's ``cpu_time``).
 
 ``--runs DIR`` keeps every campaign and its logs in DIR, one folder per
-seed, and reads back those already finished with the same plan: an
-interrupted run resumes, and a re-run with higher counts runs only what is
-new.
+campaign, and reads back the trials already finished with the same plan:
+an interrupted run resumes, and a re-run with higher counts runs only what
+is new. The trials of each section's campaigns run in one pool of
+``--workers`` processes (default: every core).
 
 Errors are scored on simulator truth by the run's referee
 (``world/scoring.py``: ``tracking_error_x`` / ``_y``, the platform centre
@@ -62,24 +63,28 @@ import statistics
 import sys
 import tempfile
 import time
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import cv2
 import numpy as np
-from bench_common import (  # the module next to this script
+
+if not __package__:  # run as a file (python benchmarks/<name>.py): the benchmarks package from the repository
+    sys.path[0] = str(Path(__file__).resolve().parents[1])
+
+from benchmarks.bench_common import (
     best_seconds,
-    campaign,
     campaign_arguments,
+    campaign_spec,
+    campaigns,
     conclude,
     machine_info,
     targets_lines,
 )
-
 from marsupial.geometry import heading_rotation, yaw_of
 from marsupial.skills.landing.detection import DetectionParams, detect_platform, tilt_of
+from marsupial.trees.campaign import CampaignSpec
 from marsupial.trees.replay import RunLog, read_log
 from marsupial.world import World
 
@@ -251,20 +256,15 @@ def section_421(runs: Path, trials: int, workers: int, extra: dict[str, str] | N
                 tag: str = "") -> dict[str, Any]:
     """§4.2.1: linear and circular tracks × the controllers, ``trials`` seeds each (``extra``: more overrides).
 
-    The campaigns run ``workers`` at a time, one process each.
+    The trials of all the campaigns run in one pool of ``workers`` processes.
     """
     rows = [(track, index, label) for track in ("linear", "circular") for index, label in enumerate(VARIANTS)]
-
-    def one(row: tuple[str, int, str]) -> list[dict[str, Any]]:
-        track, index, label = row
-        out = runs / f"421{tag}_{track}_{index}"
-        campaign(f"landing_{track}", trials, out, overrides={**VARIANTS[label], **(extra or {})})
-        return [run_stats(r["log"]).summary() for r in campaign_logs(out)]
-
-    with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-        runs_of = dict(zip(rows, pool.map(one, rows), strict=True))
+    specs = [campaign_spec(f"landing_{track}", trials, runs / f"421{tag}_{track}_{index}",
+                           overrides={**VARIANTS[label], **(extra or {})}) for track, index, label in rows]
+    campaigns(specs, workers)
     results: dict[str, Any] = {}
-    for (track, _, label), stats in runs_of.items():
+    for (track, _, label), spec in zip(rows, specs, strict=True):
+        stats = [run_stats(r["log"]).summary() for r in campaign_logs(spec.out)]
         results[f"{track}/{label}"] = {
             "track": track,
             "controller": label,
@@ -279,8 +279,8 @@ def section_421(runs: Path, trials: int, workers: int, extra: dict[str, str] | N
     return results
 
 
-def lifelong_run(runs: Path, overrides: dict[str, str], cycles: int, until: float | None = None) -> dict[str, Any]:
-    """One ``landing_lifelong`` run of ``cycles`` cycles (stopped at ``until`` simulated s if given): its statistics.
+def lifelong_spec(runs: Path, overrides: dict[str, str], cycles: int, until: float | None = None) -> CampaignSpec:
+    """The campaign of one ``landing_lifelong`` run of ``cycles`` cycles (stopped at ``until`` simulated s if given).
 
     Its folder is named by the plan but the limit, so a sweep point equal to
     a Table 2 row reads that row's run back instead of flying it again (a
@@ -288,42 +288,46 @@ def lifelong_run(runs: Path, overrides: dict[str, str], cycles: int, until: floa
     """
     plan = {**overrides, "cycles": str(cycles)}
     out = runs / ("lifelong_" + hashlib.sha1(json.dumps(plan, sort_keys=True).encode()).hexdigest()[:10])
-    summary = campaign("landing_lifelong", 1, out, overrides={**overrides, "cycles": str(cycles)}, until=until)
-    (record,) = campaign_logs(out)
-    stats = run_stats(record["log"]).summary()
-    stats.update(cycles=cycles, time_limit_s=until, wall_time_s=record["wall_time"],
-                 campaign_outcome=summary["outcomes"], cpu_time_s=record["cpu_time"],
-                 real_time_factor_cpu=record["sim_time"] / record["cpu_time"])
-    return stats
+    return campaign_spec("landing_lifelong", 1, out, overrides=plan, until=until)
+
+
+def lifelong_runs(specs: list[CampaignSpec], workers: int) -> list[dict[str, Any]]:
+    """The statistics of the life-long runs of ``specs`` (:func:`lifelong_spec`), run in one pool of ``workers``."""
+    results = []
+    for spec, summary in zip(specs, campaigns(specs, workers), strict=True):
+        (record,) = campaign_logs(spec.out)
+        stats = run_stats(record["log"]).summary()
+        stats.update(cycles=int(spec.overrides["cycles"]), time_limit_s=spec.until, wall_time_s=record["wall_time"],
+                     campaign_outcome=summary["outcomes"], cpu_time_s=record["cpu_time"],
+                     real_time_factor_cpu=record["sim_time"] / record["cpu_time"])
+        results.append(stats)
+    return results
 
 
 def lifelong(runs: Path, cycles: dict[str, int], workers: int, paper_limit: float | None) -> dict[str, Any]:
-    """§4.2.3 (Table 2 rows) and the gusty variant: one campaign trial each, ``workers`` at a time.
+    """§4.2.3 (Table 2 rows) and the gusty variant: one campaign trial each, all in one pool of ``workers``.
 
     ``cycles``: label -> cycles of that run (the labels to run). The paper's
     controller's runs stop at ``paper_limit`` simulated seconds (``None``:
     the paper's own total test time at that speed).
     """
-    def one(label: str) -> dict[str, Any]:
-        until = (paper_limit or PAPER_TIME_LIMIT_S[label]) if label in PAPER_TIME_LIMIT_S else None
-        stats = lifelong_run(runs, LIFELONG[label], cycles[label], until)
+    specs = [lifelong_spec(runs, LIFELONG[label], count,
+                           (paper_limit or PAPER_TIME_LIMIT_S[label]) if label in PAPER_TIME_LIMIT_S else None)
+             for label, count in cycles.items()]
+    results = {}
+    for label, stats in zip(cycles, lifelong_runs(specs, workers), strict=True):
         stats["real_time_factor"] = stats["sim_time_s"] / stats["wall_time_s"] if stats["wall_time_s"] else math.inf
-        return stats
-
-    with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-        return dict(zip(cycles, pool.map(one, cycles), strict=True))
+        results[label] = stats
+    return results
 
 
 def noise_sweep(runs: Path, cycles: int, workers: int) -> dict[str, Any]:
     """Ours on the nominal life-long run against ``world.sensing.noise_scale`` (:data:`SWEEP_NOISE_SCALES`)."""
-    def one(scale: float) -> dict[str, Any]:
-        # noise_scale 1 is the default: no override, the plan of the nominal row at these cycles
-        overrides = {**NOMINAL_SPEED, **({} if scale == 1.0 else {"world.sensing.noise_scale": f"{scale:g}"})}
-        return {**lifelong_run(runs, overrides, cycles, SWEEP_SECONDS_PER_CYCLE * cycles), "noise_scale": scale}
-
-    with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-        runs_of = zip(SWEEP_NOISE_SCALES, pool.map(one, SWEEP_NOISE_SCALES), strict=True)
-        return {f"{scale:g}": stats for scale, stats in runs_of}
+    # noise_scale 1 is the default: no override, the plan of the nominal row at these cycles
+    noise = [{} if scale == 1.0 else {"world.sensing.noise_scale": f"{scale:g}"} for scale in SWEEP_NOISE_SCALES]
+    specs = [lifelong_spec(runs, {**NOMINAL_SPEED, **n}, cycles, SWEEP_SECONDS_PER_CYCLE * cycles) for n in noise]
+    return {f"{scale:g}": {**stats, "noise_scale": scale}
+            for scale, stats in zip(SWEEP_NOISE_SCALES, lifelong_runs(specs, workers), strict=True)}
 
 
 def detection_speed(repeats: int) -> dict[str, Any]:

@@ -30,14 +30,18 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from bench_common import best_seconds, machine_info, print_tables, write_report  # the module next to this script
 
+if not __package__:  # run as a file (python benchmarks/<name>.py): the benchmarks package from the repository
+    sys.path[0] = str(Path(__file__).resolve().parents[1])
+
+from benchmarks.bench_common import best_seconds, machine_info, print_tables, write_report
 from marsupial.api.kinematics import ArmKinematics
 from marsupial.skills.uav_docking.engine import STAGES, MotionEngine
 from marsupial.skills.uav_docking.ik_engine import IKEngine

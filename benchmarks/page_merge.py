@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from bench_common import targets_lines
+from benchmarks.bench_common import targets_lines
 
 
 def merge_section(page: str, heading: str, lines: Sequence[str], before: str | None = None) -> str:

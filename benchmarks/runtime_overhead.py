@@ -2,7 +2,7 @@
 
     python benchmarks/runtime_overhead.py [--quick] [--out benchmarks/out/runtime_overhead.json]
 
-Two measurements, pinned to one CPU core:
+Four measurements, pinned to one CPU core:
 
 1. Ticks per wall second of 200-node trees of trivial skills (each runs
    20-35 ticks, i.e. 2-3.5 s at 10 Hz, then succeeds; every start and end
@@ -24,6 +24,10 @@ Two measurements, pinned to one CPU core:
    (every sink's writes included) over the run's wall time. Target: <= 10 %.
 3. The default mission (``marsupial run`` without arguments, which now logs
    by default) with and without its log: real-time factors (not with --quick).
+4. Where the default mission's time goes (``benchmarks/profile_breakdown.py``):
+   the engine's share (pybullet's ``stepSimulation``, ``getCameraImage``,
+   ``rayTestBatch``) of a timed run, and the Python time by module of a
+   cProfile run; with ``--quick`` its first 60 simulated seconds.
 
 Every figure is the best of several repetitions (other processes only slow
 a wall-clock benchmark down). Prints a table and writes the figures as JSON.
@@ -51,6 +55,11 @@ from pydantic import Field
 from rich.console import Console
 from rich.table import Table
 
+if not __package__:  # run as a file (python benchmarks/<name>.py): the benchmarks package from the repository
+    sys.path[0] = str(Path(__file__).resolve().parents[1])
+
+from benchmarks.bench_common import print_tables
+from benchmarks.profile_breakdown import QUICK_UNTIL_S, breakdown, breakdown_sections
 from marsupial.trees.bridge import WorldBridge
 from marsupial.trees.cli import DEFAULT_MISSION
 from marsupial.trees.host import TreeHost
@@ -101,7 +110,7 @@ def tree_mission(shape: str) -> str:
         children = "\n".join(f"    - {{repeat: {sequence}}}" for _ in range(20))
     else:
         children = "\n".join("    - {skill: trivial, params: {ticks: 0}}" for _ in range(199))
-    return (f"mission: bench_{shape}\nplugins: {{trivial: {Path(__file__).stem}:Trivial}}\n"
+    return (f"mission: bench_{shape}\nplugins: {{trivial: benchmarks.runtime_overhead:Trivial}}\n"
             f"tree:\n  parallel:\n{children}\n")
 
 
@@ -214,10 +223,10 @@ def recorder_share(mission: str, seconds: float | None, repeats: int, live: bool
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Run the benchmark, print the table, write the JSON report; returns the report."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--quick", action="store_true", help="fewer ticks and a shorter run")
+    parser.add_argument("--quick", action="store_true",
+                        help="fewer ticks, a shorter run, 60 s of the default mission profiled")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="JSON report path")
     args = parser.parse_args(argv)
-    sys.path.insert(0, str(Path(__file__).resolve().parent))  # the pinned Trivial skill's module
     report: dict[str, Any] = {
         "machine": {"python": platform.python_version(), "platform": platform.platform(),
                     "cpu": pin_to_one_core(), "py_trees": _version("py_trees"), "quick": args.quick},
@@ -236,6 +245,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     if not args.quick:
         report["default_mission"] = {"mission": DEFAULT_MISSION,
                                      **recorder_share(DEFAULT_MISSION, None, 2, live=False)}
+    report["profile"] = breakdown(DEFAULT_MISSION, QUICK_UNTIL_S if args.quick else None)
 
     table = Table(title="marsupial runtime overhead (one core)", title_justify="left")
     for column in ("measurement", "value", "target"):
@@ -259,6 +269,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
                       f"{default['real_time_factor_without_log']:.2f}x / {default['real_time_factor_with_log']:.2f}x "
                       f"(recorder share {default['recorder_share']:.1%})", "")
     Console().print(table)
+    print_tables(breakdown_sections(report["profile"]), {})
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(report, indent=2))
     print(f"written {args.out}")

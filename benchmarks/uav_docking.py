@@ -1,6 +1,6 @@
 """The VTOL-UAV docking system of Narváez et al. (2020), side by side with the paper: Tables II–III, Figs. 13, 15, 20.
 
-    python benchmarks/uav_docking.py [--quick] [--workers 2] [--runs DIR] [--encounter-seeds 5]
+    python benchmarks/uav_docking.py [--quick] [--workers N] [--runs DIR] [--encounter-seeds 5]
                                      [--out benchmarks/out/uav_docking.json] [--report docs/results/uav_docking.md]
                                      [--sweep noise|drift|all] [--sweep-seeds 5] [--no-mission]
 
@@ -62,16 +62,26 @@ from typing import Any
 import numpy as np
 import yaml
 
+if not __package__:  # run as a file (python benchmarks/<name>.py): the benchmarks package from the repository
+    sys.path[0] = str(Path(__file__).resolve().parents[1])
+
+from benchmarks import motion_engine
+from benchmarks.bench_common import (
+    campaign,
+    campaign_arguments,
+    campaign_spec,
+    campaigns,
+    machine_info,
+    print_tables,
+    write_report,
+)
 from marsupial.geometry import rotation_matrix
 from marsupial.skills.uav_docking.pose import UavPoseMeasurement
+from marsupial.trees.campaign import CampaignSpec
 from marsupial.trees.mission import find_mission
 from marsupial.trees.replay import RunLog, read_log
 from marsupial.world import World
 from marsupial.world.robots.quadrotor import BEBOP2
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import motion_engine  # noqa: E402 (the planning-cycle and IK measurements, next to this script)
-from bench_common import campaign, campaign_arguments, machine_info, print_tables, write_report  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_OUT = ROOT / "benchmarks" / "out" / "uav_docking.json"
@@ -283,8 +293,8 @@ def pose_in_M_rms(log: RunLog) -> float | None:
     return float(np.sqrt(np.mean(np.square(errors)))) if errors else None
 
 
-def sweep_point(runs: Path, workers: int, overrides: dict[str, str], seeds: int, name: str) -> list[dict[str, Any]]:
-    """The trial records of one sweep point (4 starts × 1 speed × ``seeds``).
+def sweep_point(runs: Path, overrides: dict[str, str], seeds: int, name: str) -> CampaignSpec | list[dict[str, Any]]:
+    """One sweep point (4 starts × 1 speed × ``seeds``): its trial records, or the campaign that runs them.
 
     At the default sensing (no override) they are the matching trials of the
     randomized encounters (``runs/encounters``: the same starts, speed and
@@ -298,19 +308,21 @@ def sweep_point(runs: Path, workers: int, overrides: dict[str, str], seeds: int,
                    and r["params"]["carrier_speed"] in grid["carrier_speed"] and r["seed"] < seeds]
         if len(records) == len(grid["team.uav.pose"]) * seeds:
             return records
-    out = runs / name
-    campaign(str(ENCOUNTER), seeds, out, overrides=overrides, vary=grid, workers=workers)
-    return json.loads((out / "trials.json").read_text())
+    return campaign_spec(str(ENCOUNTER), seeds, runs / name, overrides=overrides, vary=grid)
 
 
 def run_sweep(runs: Path, workers: int, name: str, seeds: int) -> list[dict[str, Any]]:
-    """Success, encounter→lock time and P_Q^M RMS at each value of one sensing knob (4 starts × 1 speed × ``seeds``)."""
+    """Success, encounter→lock time and P_Q^M RMS at each value of one sensing knob (4 starts × 1 speed × ``seeds``).
+
+    The campaigns of the points not read back run in one pool of ``workers`` processes.
+    """
     key, values, default = SWEEPS[name]
+    points = [sweep_point(runs, {} if value == default else {key: value}, seeds,
+                          "sweep_default" if value == default else f"sweep_{name}_{value}") for value in values]
+    campaigns([p for p in points if isinstance(p, CampaignSpec)], workers)
     rows = []
-    for value in values:
-        overrides = {} if value == default else {key: value}
-        folder = "sweep_default" if value == default else f"sweep_{name}_{value}"
-        records = sweep_point(runs, workers, overrides, seeds, folder)
+    for value, point in zip(values, points, strict=True):
+        records = point if isinstance(point, list) else json.loads((point.out / "trials.json").read_text())
         times = [r["metrics"]["docking_time[uav]"] for r in records
                  if r["success"] and "docking_time[uav]" in r["metrics"]]
         rms = [v for v in (pose_in_M_rms(read_log(r["log"])) for r in records if r["log"]) if v is not None]

@@ -1,6 +1,6 @@
 """UGV–UGV coordinated docking of Zhao et al., side by side with the paper: Experiment III, repeatability, Figs. 11–18.
 
-    python benchmarks/ugv_docking.py [--quick] [--workers 2] [--runs DIR] [--locations 10] [--trials 30]
+    python benchmarks/ugv_docking.py [--quick] [--workers N] [--runs DIR] [--locations 10] [--trials 30]
                                      [--out benchmarks/out/ugv_docking.json] [--report docs/results/ugv_docking.md]
 
 Everything runs through the campaign runner (``trees/campaign.py``), every
@@ -40,7 +40,7 @@ logged true poses (``/truth/<robot>/pose``).
 ``--quick``: 3 locations × 1 trial per approach, and the grades 0.5 m and
 2.6 m × 3 trials at default sensing only. ``--default-sensing-only``: the full
 counts without the noise_scale 2 repeatability. ``--runs DIR`` keeps every campaign
-and its logs in DIR and reads back those finished with the same plan. Writes
+and its logs in DIR and reads back the trials finished there with the same plan. Writes
 the JSON, the Markdown report (plots under ``docs/results/img/``) and prints
 the targets; exits with 1 when one is missed.
 """
@@ -60,9 +60,20 @@ from typing import Any
 
 import cv2
 import numpy as np
-import ugv_features  # the feature-extraction benchmark next to this script
-from bench_common import campaign, campaign_arguments, conclude, machine_info, targets_lines
 
+if not __package__:  # run as a file (python benchmarks/<name>.py): the benchmarks package from the repository
+    sys.path[0] = str(Path(__file__).resolve().parents[1])
+
+from benchmarks import ugv_features
+from benchmarks.bench_common import (
+    campaign,
+    campaign_arguments,
+    campaign_spec,
+    campaigns,
+    conclude,
+    machine_info,
+    targets_lines,
+)
 from marsupial.geometry import yaw_of
 from marsupial.skills.ugv_docking.precision import PrecisionParams, analyse
 from marsupial.trees.campaign import wilson_interval
@@ -222,13 +233,17 @@ def _mean(values: list[float | None]) -> float | None:
 
 # ------------------------------------------------------------------ experiments
 def experiment3(runs: Path, locations: int, trials: int, workers: int) -> dict[str, Any]:
-    """Each approach from each departure location, ``trials`` seeds: per-location means and the overall figures."""
+    """Each approach from each departure location, ``trials`` seeds: per-location means and the overall figures.
+
+    The trials of both approaches run in one pool of ``workers`` processes.
+    """
     poses = [pose_text(p) for p in departure_locations(locations)]
     result: dict[str, Any] = {"poses": poses, "trials": trials, "approaches": {}}
-    for mission, label in APPROACHES.items():
-        out = runs / f"exp3_{label}"
-        campaign(mission, trials, out, vary={"team.child.pose": poses}, workers=workers)
-        stats = [run_stats(r) for r in records_of(out)]
+    specs = [campaign_spec(mission, trials, runs / f"exp3_{label}", vary={"team.child.pose": poses})
+             for mission, label in APPROACHES.items()]
+    campaigns(specs, workers)
+    for label, spec in zip(APPROACHES.values(), specs, strict=True):
+        stats = [run_stats(r) for r in records_of(spec.out)]
         per_location = []
         for pose in poses:
             mine = [s for s in stats if s.pose == pose]
@@ -257,15 +272,20 @@ def experiment3(runs: Path, locations: int, trials: int, workers: int) -> dict[s
 
 def repeatability(runs: Path, grades: tuple[float, ...], trials: int, workers: int,
                   noise: dict[str, str] | None, tag: str) -> dict[str, Any]:
-    """One-time success per grade d_mc over ``trials`` random relative directions, Wilson 95 % intervals."""
-    rows = {}
+    """One-time success per grade d_mc over ``trials`` random relative directions, Wilson 95 % intervals.
+
+    The trials of all the grades run in one pool of ``workers`` processes.
+    """
+    specs = []
     for distance in grades:
         grade = GRADES_M.index(distance)  # seeds by the grade's place among all 8: a quick run is part of a full one
         poses = [pose_text(p) for p in grade_poses(distance, trials, grade)]
-        out = runs / f"repeat_{tag}_{distance:.1f}"
-        campaign(COORDINATED, 1, out, overrides=noise, vary={"team.child.pose": poses},
-                 base_seed=100 + 10 * grade + (5 if noise else 0), workers=workers)
-        stats = [run_stats(r) for r in records_of(out)]
+        specs.append(campaign_spec(COORDINATED, 1, runs / f"repeat_{tag}_{distance:.1f}", overrides=noise,
+                                   vary={"team.child.pose": poses}, base_seed=100 + 10 * grade + (5 if noise else 0)))
+    campaigns(specs, workers)
+    rows = {}
+    for distance, spec in zip(grades, specs, strict=True):
+        stats = [run_stats(r) for r in records_of(spec.out)]
         successes = sum(s.success for s in stats)
         rows[f"{distance:.1f}"] = {
             "d_mc_m": distance, "successes": successes, "trials": len(stats),

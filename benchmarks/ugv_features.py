@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import math
 import statistics
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -27,8 +28,11 @@ from typing import Any
 
 import cv2
 import numpy as np
-from bench_common import machine_info, print_tables, write_report  # the module next to this script
 
+if not __package__:  # run as a file (python benchmarks/<name>.py): the benchmarks package from the repository
+    sys.path[0] = str(Path(__file__).resolve().parents[1])
+
+from benchmarks.bench_common import machine_info, print_tables, write_report
 from marsupial.skills.ugv_docking.features import FeatureParams, extract_features, main_colours
 from marsupial.world import World
 from marsupial.world.robots.ugv_docking import place_child

@@ -2,8 +2,8 @@
 
     python benchmarks/world_speed.py [--quick] [--out benchmarks/out/world_speed.json] [--profile]
 
-Four measurements, all in the ``open_field`` scene with the robots of the
-Palafox and Narváez set-ups, in a single thread:
+Four measurements in the ``open_field`` scene with the robots of the
+Palafox and Narváez set-ups, and the default mission's profile, in a single thread:
 
 1. Physics steps per wall second of ``World.step`` with a hovering ``bebop2``
    and a driving ``summit_xl`` (controllers, drag, battery), next to bare
@@ -31,7 +31,12 @@ Palafox and Narváez set-ups, in a single thread:
 Other processes slow a wall-clock benchmark down, never up: every figure is
 the best of several repetitions (``--quick``: fewer and shorter).
 
-``--profile`` adds the top functions (cProfile, by own time) of both runs.
+5. Where the default mission's time goes (``benchmarks/profile_breakdown.py``):
+   the engine's share (pybullet's ``stepSimulation``, ``getCameraImage``,
+   ``rayTestBatch``) of a timed run, and the Python time by module of a
+   cProfile run; with ``--quick`` its first 60 simulated seconds.
+
+``--profile`` adds the top functions (cProfile, by own time) of both runs of 4.
 Prints a table and writes everything as JSON. Wall-clock timing lives here
 only: the world itself never reads the clock.
 """
@@ -43,6 +48,7 @@ import cProfile
 import io
 import math
 import pstats
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -51,9 +57,14 @@ from typing import Any
 import cv2
 import numpy as np
 import pybullet
-from bench_common import best_seconds, machine_info, print_tables, write_report  # the module next to this script
 
+if not __package__:  # run as a file (python benchmarks/<name>.py): the benchmarks package from the repository
+    sys.path[0] = str(Path(__file__).resolve().parents[1])
+
+from benchmarks.bench_common import best_seconds, machine_info, print_tables, write_report
+from benchmarks.profile_breakdown import QUICK_UNTIL_S, breakdown, breakdown_sections
 from marsupial.api.model import Intrinsics
+from marsupial.trees.cli import DEFAULT_MISSION
 from marsupial.world import World
 from marsupial.world.sensors.base import SensorConfig
 from marsupial.world.sensors.camera import Camera
@@ -331,7 +342,7 @@ def print_report(report: dict[str, Any]) -> None:
             ],
         ),
     ]
-    print_tables(sections, report["machine"])
+    print_tables(sections + breakdown_sections(report["profile"]), report["machine"])
     for key, text in report.get("profiles", {}).items():
         print(f"\nprofile of {key}:\n{text}")
 
@@ -339,7 +350,8 @@ def print_report(report: dict[str, Any]) -> None:
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Run the benchmark, print the tables, write the JSON report; returns the report."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--quick", action="store_true", help="short runs (10 s of simulation, fewer frames)")
+    parser.add_argument("--quick", action="store_true",
+                        help="short runs (10 s of simulation, fewer frames; 60 s of the default mission profiled)")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="JSON report path")
     parser.add_argument("--profile", action="store_true", help="also print cProfile summaries of the real-time runs")
     args = parser.parse_args(argv)
@@ -353,6 +365,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     report["real_time"], profiles = bench_real_time(args.quick, args.profile)
     if profiles:
         report["profiles"] = profiles
+    report["profile"] = breakdown(DEFAULT_MISSION, QUICK_UNTIL_S if args.quick else None)
     print_report(report)
     write_report(report, args.out)
     return report

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import py_trees
+import pytest
 from py_trees.common import Status
 from skill_harness import Harness
 
@@ -23,6 +24,7 @@ from marsupial.world.robots.mms import CAMERA_INTRINSICS
 from marsupial.world.sensors.camera import OPTICAL_FORWARD
 
 
+@pytest.mark.slow
 def test_the_mms_reaches_a_placement_from_which_its_camera_sees_the_best_aperture_and_plans_launches():
     with World(scene="collapsed_mockup", seed=3) as world:
         mms = world.add_robot("mms", "mms", pose=[0.3, -2.4, 1.5708])

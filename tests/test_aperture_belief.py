@@ -74,6 +74,7 @@ def test_the_map_marks_the_wall_occupied_the_space_in_front_free_and_behind_it_u
     assert (occupancy.state(np.array(back_wall)) == OCCUPIED).all()
 
 
+@pytest.mark.slow
 def test_a_consistent_aperture_ranks_above_an_erratic_one():
     occupancy, belief = VolumetricMap(RESOLUTION), ApertureBelief(RESOLUTION)
     params = belief.params
@@ -125,6 +126,7 @@ def test_a_detections_region_fills_its_opening_from_the_face_to_d_a_behind_it():
         assert span > 0.65 * (x1 - x0) * (z1 - z0)
 
 
+@pytest.mark.slow
 def test_aperture_scan_in_collapsed_mockup_ranks_the_opening_it_faces_first():
     """One sweep of five pan poses 1.3 m from the wall, facing the amoeba opening; the collapsed and U openings
     drift in and out of view and the orthogonal one is at the edge: all are real, the faced one is the most

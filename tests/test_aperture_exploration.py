@@ -60,6 +60,7 @@ def test_the_wall_hides_what_lies_behind_it_from_the_gain():
     assert ahead < back  # what the camera looked at is known; the unknown is behind it
 
 
+@pytest.mark.slow
 def test_viewpoints_turn_to_the_unseen_and_none_is_left_once_all_is_seen():
     occupancy = _seen_map()
     start = np.array([-1.0, -2.0, math.pi / 2])
@@ -90,6 +91,7 @@ def test_exploration_params_refuse_an_empty_or_a_huge_volume_and_nan():
         ExploreVolume.Params(bounds=[[float("nan"), -3.0, 0.0], [1.0, 0.5, 1.6]])
 
 
+@pytest.mark.slow
 def test_the_mms_explores_the_approach_area_until_stuck(tmp_path):
     """From 2.4 m before the wall facing it, no horizon: several views, then no reachable view offers 1.5 m³; the
     condition agrees; every view stands 1.2 m clear of the wall; back where it began, facing the wall; logged."""
@@ -118,6 +120,7 @@ def test_the_mms_explores_the_approach_area_until_stuck(tmp_path):
     assert abs(math.remainder(estimate.yaw - math.pi / 2, math.tau)) < 0.06
 
 
+@pytest.mark.slow
 def test_with_the_default_horizon_the_mms_is_stuck_after_one_look_around(tmp_path):
     """The paper's case (§III Problem 1: exploration "assumed to (almost) immediately reach the maximum-possible
     exploration gain"): within 1 m of the start no view offers 1.5 m³ of V."""

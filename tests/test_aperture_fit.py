@@ -43,6 +43,7 @@ def _passes(world: World, x: float, z: float) -> bool:
     return pybullet.rayTest([x, -0.2, z], [x, 0.2, z], physicsClientId=world.client_id)[0][0] < 0
 
 
+@pytest.mark.slow
 def test_the_opening_gives_the_mav_the_clearance_asked_for_and_the_wall_is_built_so():
     clearance = 0.02
     with World(scene="collapsed_mockup", seed=0) as world:

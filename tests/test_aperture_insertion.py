@@ -9,6 +9,7 @@ from __future__ import annotations
 import fcl
 import numpy as np
 import py_trees
+import pytest
 from py_trees.common import Status
 from skill_harness import Harness
 
@@ -89,6 +90,7 @@ def test_a_stray_apparatus_against_the_wall_is_a_rim_contact_in_the_log(tmp_path
     assert counts[-1] == len(touches)
 
 
+@pytest.mark.slow
 def test_the_mms_slips_a_scout_through_the_aperture_launches_it_and_stows_the_apparatus_without_rim_contact(tmp_path):
     with World(scene="collapsed_mockup", seed=3) as world:
         mms = world.add_robot("mms", "mms", pose=[0.3, -2.4, 1.5708])

@@ -86,6 +86,7 @@ def _plan(occupancy, seed=0, target=TARGET, params=None):
                            np.random.default_rng(seed), params)
 
 
+@pytest.mark.slow
 def test_placements_lie_in_the_cone_clear_of_m_and_see_the_aperture_through_the_arm(seen):
     params = PlacementParams()
     placements = _plan(seen)
@@ -123,6 +124,7 @@ def test_placements_are_deterministic_given_the_seed(seen):
     assert [p.pose.tolist() for p in first] != [p.pose.tolist() for p in other]
 
 
+@pytest.mark.slow
 def test_a_blocked_cone_has_no_placement():
     assert _plan(_map(rubble=True)) == []
 

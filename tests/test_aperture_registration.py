@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from marsupial.skills.aperture.registration import RegistrationParams, register_planar, register_searched
 
@@ -65,6 +66,7 @@ def test_a_correction_beyond_the_plausible_drift_is_refused():
     assert register_planar(frame, _surfaces(0.01), estimate, RegistrationParams(max_correction=0.1)) is not None
 
 
+@pytest.mark.slow
 def test_a_drift_of_a_slipping_wheel_is_found_along_the_heading():
     # the base held by an obstacle while its wheels turned: the odometry ran 0.6 m on along the heading (measured
     # 0.58 and 0.82 m in insertion trials); the plain registration pairs the floor only, the searched one finds it

@@ -55,6 +55,7 @@ def visible_box(page, selector: str) -> dict:
     return box
 
 
+@pytest.mark.slow
 def test_first_run_and_its_report_render_in_chromium(browser, tmp_path, monkeypatch):
     """What a new user does: ``marsupial run`` (logs by default, prints the report command), then that command."""
     monkeypatch.chdir(tmp_path)
@@ -79,6 +80,7 @@ def test_first_run_and_its_report_render_in_chromium(browser, tmp_path, monkeypa
     assert page.locator("#outcome").inner_text() == "success"
 
 
+@pytest.mark.slow
 def test_campaign_report_renders_in_chromium(browser, tmp_path):
     page_path = write_report(fake_campaign(tmp_path / "campaign"))
     page, problems, dialogs = open_page(browser, page_path, tmp_path / "campaign.png")

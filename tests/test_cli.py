@@ -156,6 +156,7 @@ def test_mission_failure_exits_1(tmp_path):
     assert result.exit_code == 1
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "signum, code, outcome", [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated")]
 )

@@ -64,6 +64,7 @@ def docking(tmp_path_factory):
     return result, read_log(tmp / "docking.mcap")
 
 
+@pytest.mark.slow
 def test_one_docking_locks_the_uav_on_part_a(docking):
     result, log = docking
     assert result.outcome == "success"
@@ -83,6 +84,7 @@ def test_one_docking_locks_the_uav_on_part_a(docking):
     assert np.linalg.norm(p_uav[-1, :2] - p_carrier[-1, :2]) < 0.4 and 0.6 < p_uav[-1, 2] < 1.3
 
 
+@pytest.mark.slow
 def test_contact_follows_the_log_law_of_eq_15(docking):
     _, log = docking
     t_c, t_values = log.metric("contact_t", robot="uav")
@@ -101,6 +103,7 @@ def test_contact_follows_the_log_law_of_eq_15(docking):
     assert rise > 0.25  # Part A rose the whole gap to Part B
 
 
+@pytest.mark.slow
 def test_an_occlusion_during_contact_cancels_and_asks_for_authorization_again(tmp_path):
     with World(seed=2) as world:
         world.add_robot("mobile_manipulator", "carrier", arm_pose="docking_ready", sensors=EYE_IN_HAND)
@@ -150,6 +153,7 @@ def test_an_occlusion_during_contact_cancels_and_asks_for_authorization_again(tm
     assert dropped.min() > at_cancel + 0.03 and np.abs(dropped - approach["gap"]).max() < 0.04
 
 
+@pytest.mark.slow
 def test_low_battery_preempts_exploration_and_docks_the_uav(tmp_path):
     tree = """\
 until:

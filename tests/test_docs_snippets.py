@@ -53,6 +53,7 @@ FRAGMENT_TEAM = {
     "ugv": {"robot": "summit_xl", "pose": [5, 0, 0]},
     "drone": {"robot": "ardrone2", "stored_on": "ugv"},
 }
+SIMULATING_PAGES = {"world.md"}  # its run snippets step worlds for seconds: in the full tier only
 _FENCE = re.compile(r"^(?:<!-- (?P<mark>[^>]*?) -->\n)?```(?P<lang>yaml|python|toml)\n(?P<body>.*?)^```$", re.M | re.S)
 
 
@@ -148,7 +149,9 @@ def _check_yaml(page: Path, line: int, body: str, mark: str, scratch: Path, pins
         compile_mission(parse_mission(_mission(body, pins), where, path=scratch / "missions" / "snippet.yaml"))
 
 
-@pytest.mark.parametrize("page", PAGES, ids=_ids)
+@pytest.mark.parametrize(
+    "page", [pytest.param(p, marks=pytest.mark.slow) if p.name in SIMULATING_PAGES else p for p in PAGES], ids=_ids
+)
 def test_every_snippet_compiles_or_runs(page, tmp_path, monkeypatch):
     found = snippets(page)
     module = types.ModuleType(f"marsupial_docs_{page.stem.lower()}")

@@ -110,6 +110,7 @@ def test_an_empty_battery_stops_the_motors():
         assert not uav.motors_on
 
 
+@pytest.mark.slow
 def test_the_child_ugv_drains_while_driving_charges_on_the_lift_and_battery_below_reads_it():
     from skill_harness import Harness
 

@@ -30,6 +30,7 @@ def _hover_errors(seed, noise_scale, checkpoints=(10.0, 60.0)):
 
 
 # ----------------------------------------------------------- flight estimator
+@pytest.mark.slow
 def test_flight_estimate_drifts_with_time_at_default_sensing_and_not_at_noise_scale_0():
     errors = np.array([_hover_errors(seed, 1.0) for seed in range(3)])
     assert errors[:, 1].mean() > errors[:, 0].mean()  # dead reckoning: the error grows
@@ -151,6 +152,7 @@ def _odometry_error(seed, distance, noise_scale=1.0, kind="mobile_manipulator"):
         return _error(robot)
 
 
+@pytest.mark.slow
 def test_wheel_odometry_drift_grows_with_distance():
     short = np.mean([_odometry_error(seed, 3.0) for seed in range(3)])
     long = np.mean([_odometry_error(seed, 24.0) for seed in range(3)])

@@ -66,6 +66,7 @@ def phases(log, phase):
     return [e for e in log.events_of("state_change") if e.get("phase") == phase]
 
 
+@pytest.mark.slow
 def test_uav_never_leaves_D_team_of_the_moving_carrier(log):
     t_uav, p_uav = log.poses("uav")
     t_car, p_car = log.poses("carrier")
@@ -76,6 +77,7 @@ def test_uav_never_leaves_D_team_of_the_moving_carrier(log):
     assert distance.max() > D_TEAM - 1.5  # and the constraint was binding
 
 
+@pytest.mark.slow
 def test_uav_stops_every_D_e_for_a_yaw_sweep(log):
     events = [e for e in log.events_of("state_change") if "phase" in e]
     sweeps = [(e, after) for e, after in itertools.pairwise(events) if e["phase"] == "sweep"]
@@ -94,6 +96,7 @@ def test_uav_stops_every_D_e_for_a_yaw_sweep(log):
         assert moved < 0.6 * carrier_moved + 0.1  # held in place but for the pull of the D_team leash
 
 
+@pytest.mark.slow
 def test_coverage_is_written_for_area_explored(log):
     t, coverage = log.metric("coverage", robot="uav")
     assert len(coverage) >= 3

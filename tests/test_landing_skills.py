@@ -44,6 +44,7 @@ def _assert_rides_the_platform(log):
     assert landed.tolist() == [1.0]
 
 
+@pytest.mark.slow
 def test_one_cycle_on_the_circular_track_lands_on_the_platform(tmp_path):
     result, log = _run(tmp_path, "landing_circular", **{"cycle.land_after": 2.0})
     assert result.outcome == "success" and log.outcome == "success"
@@ -56,6 +57,7 @@ def test_one_cycle_on_the_circular_track_lands_on_the_platform(tmp_path):
     assert height[np.searchsorted(t, takeoff_end), 2] - PLATFORM_TOP == pytest.approx(4.0, abs=0.25)  # nominal height
 
 
+@pytest.mark.slow
 def test_an_occluded_platform_triggers_relocalize_and_the_cycle_completes(tmp_path):
     occlusion = "{occlusion: {robot: ugv, link: landing_platform, start: 6.0, duration: 1.5}}"
     result, log = _run(tmp_path, "landing_circular", **{"cycle.land_after": 2.0, "world.disturbances": occlusion})
@@ -75,6 +77,7 @@ def test_an_occluded_platform_triggers_relocalize_and_the_cycle_completes(tmp_pa
     _assert_rides_the_platform(log)
 
 
+@pytest.mark.slow
 def test_at_10_hz_with_gusts_the_uav_lands_on_the_moving_platform(tmp_path):
     # the touchdown test reads every IMU sample of its window, not one per tick: at a 10 Hz tick rate the
     # platform's vibration is not aliased away into "landed on the ground" (§3.3.1)
@@ -102,6 +105,7 @@ tree:
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("tick_hz", [10, 30])
 def test_a_still_platform_feels_like_the_ground_and_the_landing_fails(tmp_path, tick_hz):
     # the landed test needs the IMU to feel the moving platform (§3.3.1): on a still one it reports the ground

@@ -65,6 +65,7 @@ async def watch(url: str) -> tuple[dict, dict, dict]:
         return info, channels, received
 
 
+@pytest.mark.slow
 def test_a_foxglove_client_watches_demo_hover(tmp_path):
     process, url, line = start_live(tmp_path, "demo_hover", "--speed", "4", "--no-log")
     try:

@@ -19,6 +19,7 @@ import re
 from pathlib import Path
 from typing import Any
 
+import pytest
 import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -101,6 +102,7 @@ def fails_located_or_runs(folder: Path, data: dict, what: str) -> None:
     assert read_log(folder / "run.mcap").outcome == result.outcome
 
 
+@pytest.mark.slow
 @FUZZ
 @given(path=st.sampled_from(PATHS), value=HOSTILE, add_key=st.booleans())
 def test_a_mutated_mission_fails_located_or_runs(tmp_path_factory, path, value, add_key):
@@ -108,6 +110,7 @@ def test_a_mutated_mission_fails_located_or_runs(tmp_path_factory, path, value, 
     fails_located_or_runs(tmp_path_factory.mktemp("fuzz"), data, f"{path}={value!r}")
 
 
+@pytest.mark.slow
 @FUZZ
 @given(path=st.sampled_from(TYPED_PATHS), value=HOSTILE, add_key=st.booleans())
 def test_a_mutated_typed_section_fails_located_or_runs(tmp_path_factory, path, value, add_key):

@@ -107,6 +107,7 @@ def test_operator_set_points_replace_the_guide_path(world):
     assert np.linalg.norm(carrier.footprint_pose()[0][:2] - [1.0, 2.5]) <= 0.3
 
 
+@pytest.mark.slow
 def test_navigate_follows_the_plans_guide_path_through_the_building_on_map_localisation(tmp_path):
     mission = tmp_path / "m.yaml"
     mission.write_text(

@@ -84,6 +84,7 @@ def test_arm_search_finds_a_marker_out_of_the_upright_view():
         assert np.abs(q_search[[0, 4]]).max() > 0.05  # found with the camera turned away from straight up
 
 
+@pytest.mark.slow
 def test_relative_hold_keeps_the_uav_at_its_pose_in_M_while_the_carrier_drives():
     with World(seed=7) as world:
         carrier, uav, harness, rendezvous = encounter(world, [-1.0, 0.8, 1.6, 0.0])

@@ -138,6 +138,7 @@ def test_an_unknown_detector_in_a_mission_is_an_error_at_its_line(tmp_path):
 
 
 # -------------------------------------------------------------------- relay
+@pytest.mark.slow
 def test_the_relay_delivers_decoded_frames_late_and_counts_the_lost_ones():
     link = TeamLinkConfig(latency_s=0.2, jitter_s=0.0, drop=0.3)
     with World(scene="collapsed_mockup", seed=5, team_link=link) as world:
@@ -200,6 +201,7 @@ def _at(log, robot, t):
     return xyz[min(np.searchsorted(times, t), len(times) - 1)]
 
 
+@pytest.mark.slow
 def test_one_scout_with_a_right_bias_finds_the_fire_extinguisher(tmp_path):
     result, log = _run(tmp_path)
     assert result.outcome == "success", result.message
@@ -219,6 +221,7 @@ def test_one_scout_with_a_right_bias_finds_the_fire_extinguisher(tmp_path):
     assert not log.events_of("unintended_contact")
 
 
+@pytest.mark.slow
 def test_a_low_battery_lands_the_scout_where_it_is(tmp_path):
     result, log = _run(tmp_path, battery=0.201, until=20)
     assert result.outcome == "success", result.message
@@ -230,6 +233,7 @@ def test_a_low_battery_lands_the_scout_where_it_is(tmp_path):
     assert np.hypot(*(xyz[-1, :2] - _at(log, "scout", t_pre)[:2])) < 0.3  # where it was
 
 
+@pytest.mark.slow
 def test_the_operator_recall_flies_the_scout_back_along_its_path(tmp_path):
     result, log = _run(tmp_path, operator="[{at: 6.0, say: recall_scout, why: come back}]", until=40)
     assert result.outcome == "success", result.message
@@ -251,6 +255,7 @@ tree: {skill: scout, robot: scout, params: {carrier: mms, bias: 0.0}}
 """
 
 
+@pytest.mark.slow
 def test_a_scout_pressed_against_a_wall_turns_away(tmp_path):
     # in the corner the walls fill the view near the depth map's floor and the policy keeps saying forward
     # (§IV-G); the Tello's own estimate does not move, and stuck_time later it turns by unstick_angle

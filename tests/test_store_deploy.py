@@ -98,6 +98,7 @@ def deployment(tmp_path_factory):
         yield read_log(path), samples, weight, monitor.events, final
 
 
+@pytest.mark.slow
 def test_deploy_releases_only_once_the_thrust_holds_the_weight(deployment):
     log, samples, weight, _, final = deployment
     assert final["status"] == Status.SUCCESS
@@ -111,6 +112,7 @@ def test_deploy_releases_only_once_the_thrust_holds_the_weight(deployment):
     assert final["motors"]
 
 
+@pytest.mark.slow
 def test_deploy_climbs_clear_of_the_arm_without_touching_the_carrier(deployment):
     log, samples, _, contacts, final = deployment
     assert contacts == []  # zero unintended UAV-robot contacts (Part A excepted)

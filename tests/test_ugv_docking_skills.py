@@ -80,6 +80,7 @@ def yard():
         yield world, mother, child, harness
 
 
+@pytest.mark.slow
 def test_conditions_on_the_child_camera(yard):
     world, mother, child, h = yard
     own = {
@@ -109,6 +110,7 @@ def test_conditions_on_the_child_camera(yard):
     assert first_lost - first_miss >= 2 and not any(c4[:first_lost])
 
 
+@pytest.mark.slow
 def test_the_mother_judges_c1_and_c3_on_the_features_the_child_sends(yard):
     world, mother, child, h = yard
     mother_nodes = {
@@ -125,6 +127,7 @@ def test_the_mother_judges_c1_and_c3_on_the_features_the_child_sends(yard):
     assert _checks(h, world, both, seconds=1.2) == {"C1": False, "C3": False, "child": False}
 
 
+@pytest.mark.slow
 def test_coordinated_docking_ends_with_the_child_lifted_inside_the_capsule(tmp_path):
     result = marsupial.run("ugv_docking", log=tmp_path / "ugv.mcap")
     assert result.outcome == "success", result.message
@@ -167,6 +170,7 @@ KIDNAP_AT = 8.0  # s: the child is approaching (from 4.5 s with seed 0)
 KIDNAP_POSE = [-1.4, 0.2, 2.77]  # position B, its back towards the benchmark (it headed ≈ -0.37 rad)
 
 
+@pytest.mark.slow
 def test_a_kidnapped_child_falls_back_through_c4_relinks_and_docks(tmp_path):
     """Zhao et al. §4.2, Experiment II: moved by hand while approaching, its back to the benchmark."""
     kidnap = {"kidnap": [{"robot": "child", "at": KIDNAP_AT, "pose": KIDNAP_POSE}]}
@@ -191,6 +195,7 @@ def test_a_kidnapped_child_falls_back_through_c4_relinks_and_docks(tmp_path):
     _assert_stored(log, int(np.searchsorted(log.poses("child")[0], lifted)) - 1)
 
 
+@pytest.mark.slow
 def test_independent_docking_repositions_onto_the_entry_line_then_docks(tmp_path):
     """Experiment III's baseline: the mother holds still; the child estimates the entry line from its first view."""
     result = marsupial.run("ugv_docking_independent", log=tmp_path / "independent.mcap")

@@ -14,6 +14,7 @@ def _preemption(log, by: str) -> dict:
     return event
 
 
+@pytest.mark.slow
 def test_the_patrol_is_preempted_by_the_recall_then_the_battery_and_docks_twice(tmp_path):
     result = marsupial.run("marsupial_ugv_patrol", log=tmp_path / "patrol.mcap")
     assert result.outcome == "success", result.message

@@ -1,17 +1,28 @@
-"""Campaigns: many independent seeded trials of a mission, in parallel, with a statistical summary.
+"""Campaigns: many independent seeded trials of missions, in parallel, with a statistical summary.
 
 Trial ``i`` of every parameter combination runs with seed ``base_seed + i``
 (so combinations are compared on the same seeds). ``--vary k=v1,v2`` adds
 one dimension of combinations per key (their cartesian product); ``--set``
-values apply to every trial. Trials run in local processes (spawned, one
-world each) or on Ray (``marsupial[ray]``); both call :func:`run_trial`, so
-the same seeds give the same per-trial outcomes on either backend.
+values apply to every trial. Trials are numbered seed by seed (every
+combination of the first seed, then of the next …), so a campaign re-run
+with more trials keeps the numbers of those it had.
+
+One runner, :func:`run_trials`, runs the trials of every campaign and of
+every benchmark: one after another in this process (``workers=1``), in
+local processes (spawned, one world each; all cores by default) or on Ray
+(``marsupial[ray]``), with a progress bar and its ETA. Each trial is a
+pure function of its mission, seed and overrides (:func:`run_trial`), and
+the records are put in trial order whatever order they finish in, so every
+backend and worker count gives the same per-trial results.
+:func:`run_campaigns` runs several campaigns' trials in one pool.
 
 Output folder: ``trials.json`` (one record per trial: seed, parameters,
 outcome, metrics …), ``trials.csv`` (the same, flat), ``summary.json``
 (success rate with a Wilson 95 % interval and medians, overall and per
-combination) and ``logs/`` (the MCAP log of every failing trial, or of all
-with ``keep_logs="all"``). Failing trials are kept as they are, never retried.
+combination), ``finished.jsonl`` (each trial's plan and record as it
+finishes: what ``resume`` reads back) and ``logs/`` (the MCAP log of every
+failing trial, or of all with ``keep_logs="all"``). Failing trials are kept
+as they are, never retried.
 """
 
 from __future__ import annotations
@@ -31,13 +42,21 @@ from pathlib import Path
 from typing import Any
 
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
 
 from .errors import MissionError, check_seed
 from .mission import load_mission
 
 BACKENDS = ("local", "ray")
 KEEP_LOGS = ("failed", "all", "none")
+JOURNAL = "finished.jsonl"  # a campaign folder's finished trials, one JSON line each: {"plan": …, "record": …}
 WILSON_Z = 1.959963984540054  # two-sided 95 % normal quantile
 MAX_SOCKET_PATH = 107 - 66  # AF_UNIX path limit minus what Ray appends (/session_<date>_<pid>/sockets/plasma_store)
 
@@ -53,6 +72,26 @@ class Trial:
     varied: dict[str, str] = field(default_factory=dict)
     until: float | None = None
     log_dir: str | None = None
+    keep_logs: str = "failed"
+
+    def plan(self) -> dict[str, Any]:
+        """What decides this trial's run (JSON-ready): its number, mission, seed, overrides, varied values, limit."""
+        return {"trial": self.index, "mission": self.mission, "seed": self.seed, "set": dict(self.overrides),
+                "params": dict(self.varied), "until": self.until}
+
+
+@dataclass(frozen=True)
+class CampaignSpec:
+    """One campaign of :func:`run_campaigns`: mission (name or path), trials per combination, output folder,
+    seed of trial 0, ``--set`` overrides, ``--vary`` values, time limit (simulated s) and which logs to keep."""
+
+    mission: str
+    trials: int
+    out: Path
+    base_seed: int = 0
+    overrides: dict[str, str] = field(default_factory=dict)
+    vary: dict[str, list[str]] = field(default_factory=dict)
+    until: float | None = None
     keep_logs: str = "failed"
 
 
@@ -159,7 +198,7 @@ def plan_trials(
     log_dir: Path | None = None,
     keep_logs: str = "failed",
 ) -> list[Trial]:
-    """The trials of a campaign: every combination of ``vary`` values × seeds ``base_seed + i``.
+    """The trials of a campaign: seeds ``base_seed + i`` × every combination of ``vary`` values, seed by seed.
 
     Each combination is validated by loading and compiling the mission with
     its overrides (a :class:`MissionError` before anything runs).
@@ -178,8 +217,8 @@ def plan_trials(
     for combo in combos:
         compile_mission(load_mission(mission, {**overrides, **combo}))
     plan: list[Trial] = []
-    for combo in combos:
-        for i in range(trials):
+    for i in range(trials):
+        for combo in combos:
             plan.append(
                 Trial(len(plan), base_seed + i, mission, overrides, combo, until,
                       str(log_dir) if log_dir is not None else None, keep_logs)
@@ -187,16 +226,31 @@ def plan_trials(
     return plan
 
 
-# ------------------------------------------------------------------ backends
-def _run_local(trials: Sequence[Trial], workers: int, done: Callable[[dict[str, Any]], None]) -> list[dict[str, Any]]:
-    context = multiprocessing.get_context("spawn")
-    records = []
-    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-        futures = [pool.submit(run_trial, t) for t in trials]
+# ------------------------------------------------------------------ runner
+#: called with each trial's position in the list that :func:`run_trials` runs, and its record, as it finishes
+OnRecord = Callable[[int, dict[str, Any]], None]
+
+
+def worker_count(workers: int | None) -> int:
+    """``workers``, or every core of this machine when ``None``."""
+    return max(1, workers or os.cpu_count() or 1)
+
+
+def _run_serial(trials: Sequence[Trial], done: OnRecord) -> None:
+    for position, trial in enumerate(trials):
+        done(position, run_trial(trial))
+
+
+def _run_local(trials: Sequence[Trial], workers: int, done: OnRecord) -> None:
+    pool = ProcessPoolExecutor(max_workers=min(workers, len(trials)), mp_context=multiprocessing.get_context("spawn"))
+    try:
+        futures = {pool.submit(run_trial, trial): position for position, trial in enumerate(trials)}
         for future in as_completed(futures):
-            records.append(future.result())
-            done(records[-1])
-    return records
+            done(futures[future], future.result())
+    except BaseException:
+        pool.shutdown(wait=False, cancel_futures=True)  # an interrupted campaign starts no further trial
+        raise
+    pool.shutdown()
 
 
 def ray_temp_dir(out: Path) -> Path:
@@ -210,9 +264,7 @@ def ray_temp_dir(out: Path) -> Path:
     return temp
 
 
-def _run_ray(
-    trials: Sequence[Trial], workers: int, address: str | None, out: Path, done: Callable[[dict[str, Any]], None]
-) -> list[dict[str, Any]]:
+def _run_ray(trials: Sequence[Trial], workers: int, address: str | None, temp: Path, done: OnRecord) -> None:
     os.environ.setdefault("RAY_AUTH_MODE", "disabled")  # no token written under ~/.ray
     try:
         import ray
@@ -223,23 +275,182 @@ def _run_ray(
     if address:
         ray.init(address=address, log_to_driver=False)
     else:
-        temp = ray_temp_dir(out)
         temp.mkdir(parents=True, exist_ok=True)
         ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False, _temp_dir=str(temp))
     try:
         remote = ray.remote(num_cpus=1)(run_trial)
-        pending = [remote.remote(t) for t in trials]
-        records = []
+        positions = {remote.remote(trial): position for position, trial in enumerate(trials)}
+        pending = list(positions)
         while pending:
             ready, pending = ray.wait(pending, num_returns=1)
-            records.append(ray.get(ready[0]))
-            done(records[-1])
+            done(positions[ready[0]], ray.get(ready[0]))
     finally:
         ray.shutdown()
-    return records
 
 
-# ------------------------------------------------------------------ campaign
+def run_trials(
+    trials: Sequence[Trial],
+    workers: int | None = None,
+    backend: str = "local",
+    address: str | None = None,
+    ray_dir: Path | None = None,
+    console: Console | None = None,
+    label: str = "trials",
+    on_record: OnRecord | None = None,
+) -> list[dict[str, Any]]:
+    """Run ``trials``, ``workers`` at a time (every core by default); their records in the order of ``trials``.
+
+    ``workers=1`` (or a single trial) runs them one after another in this
+    process, more in spawned local processes; ``backend="ray"`` runs them on the Ray cluster at
+    ``address``, or on a local Ray whose session files go to ``ray_dir``. A
+    progress bar with the trials done, the failures and the ETA shows when
+    ``console`` is a terminal. ``on_record(position, record)`` is called as
+    each trial finishes (in completion order); the list returned does not
+    depend on that order.
+    """
+    if backend not in BACKENDS:
+        raise MissionError(f"unknown backend '{backend}'", expected=f"one of {', '.join(BACKENDS)}")
+    workers = worker_count(workers)
+    records: list[dict[str, Any] | None] = [None] * len(trials)
+    console = console or Console()
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+               TextColumn("ETA"), TimeRemainingColumn())
+    with Progress(*columns, console=console, disable=not console.is_terminal) as bar:
+        task = bar.add_task(f"{label} ({backend})", total=len(trials))
+        failures = 0
+
+        def done(position: int, record: dict[str, Any]) -> None:
+            nonlocal failures
+            records[position] = record
+            failures += 0 if record["success"] else 1
+            if on_record is not None:
+                on_record(position, record)
+            bar.update(task, advance=1, description=f"{label} ({backend}, {failures} failed)")
+
+        if backend == "ray" and trials:
+            _run_ray(trials, workers, address, ray_dir or Path("ray").resolve(), done)
+        elif workers == 1 or len(trials) < 2:
+            _run_serial(trials, done)
+        else:
+            _run_local(trials, workers, done)
+    return [record for record in records if record is not None]
+
+
+# ------------------------------------------------------------------ resuming
+def _finished(journal: Path) -> dict[int, dict[str, Any]]:
+    """The ``finished.jsonl`` entries of a campaign folder by trial number (the last one of each; a line cut off
+    by an interruption is skipped)."""
+    entries: dict[int, dict[str, Any]] = {}
+    if not journal.is_file():
+        return entries
+    for line in journal.read_text().splitlines():
+        try:
+            entry = json.loads(line)
+            entries[int(entry["plan"]["trial"])] = entry
+        except (ValueError, KeyError, TypeError):
+            continue
+    return entries
+
+
+def _reusable(trial: Trial, entry: Mapping[str, Any] | None) -> bool:
+    """Whether a finished trial's ``entry`` is the run ``trial`` would give, with the log ``trial`` keeps.
+
+    The same number, mission, seed, overrides and varied values; the same
+    time limit, or a run that ended on its own before the new limit (runs
+    are deterministic, so it is the run that limit gives).
+    """
+    if entry is None:
+        return False
+    old, new, record = entry["plan"], trial.plan(), entry["record"]
+    if any(old.get(key) != new[key] for key in ("trial", "mission", "seed", "set", "params")):
+        return False
+    ended = record["outcome"] != "time_limit" and (trial.until is None or record["sim_time"] < trial.until)
+    if old.get("until") != trial.until and not ended:
+        return False
+    needs_log = trial.keep_logs == "all" or (trial.keep_logs == "failed" and not record["success"])
+    return not needs_log or (record.get("log") is not None and Path(record["log"]).is_file())
+
+
+# ------------------------------------------------------------------ campaigns
+def run_campaigns(
+    specs: Sequence[CampaignSpec],
+    workers: int | None = None,
+    backend: str = "local",
+    address: str | None = None,
+    resume: bool = False,
+    console: Console | None = None,
+) -> list[dict[str, Any]]:
+    """Run the trials of several campaigns in one pool; write each one's files in its ``out``; their summaries.
+
+    With ``resume``, a trial already finished in its folder (``finished.jsonl``)
+    with the same plan (:func:`_reusable`) is read back instead of run: an
+    interrupted campaign continues, and one re-run with more trials runs only
+    the new ones. Bad input (mission, overrides, backend, two campaigns in one
+    folder) raises :class:`MissionError` before any trial runs.
+    """
+    if backend not in BACKENDS:
+        raise MissionError(f"unknown backend '{backend}'", expected=f"one of {', '.join(BACKENDS)}")
+    if not specs:
+        return []
+    folders = [Path(spec.out).resolve() for spec in specs]
+    if len(set(folders)) != len(folders):
+        raise MissionError("two campaigns of one run write to the same folder", expected="a folder per campaign")
+    ray_dir = ray_temp_dir(Path(specs[0].out)) if backend == "ray" and not address else None
+    plans = [plan_trials(s.mission, s.trials, s.base_seed, s.overrides, s.vary, s.until, Path(s.out) / "logs",
+                         s.keep_logs) for s in specs]
+    console = console or Console()
+    records: list[list[dict[str, Any] | None]] = []
+    for spec, plan in zip(specs, plans, strict=True):
+        out = Path(spec.out)
+        out.mkdir(parents=True, exist_ok=True)
+        if spec.keep_logs != "none":
+            (out / "logs").mkdir(exist_ok=True)
+        finished = _finished(out / JOURNAL) if resume else {}
+        kept = {t.index: finished[t.index] for t in plan if _reusable(t, finished.get(t.index))}
+        (out / JOURNAL).write_text("".join(json.dumps(entry) + "\n" for entry in kept.values()))
+        records.append([kept[t.index]["record"] if t.index in kept else None for t in plan])
+        if kept:
+            console.print(f"{out}: {len(kept)} of {len(plan)} trials read back (finished before, same plan)")
+    resumed = [sum(record is not None for record in of_one) for of_one in records]
+    todo = [(c, t) for c, plan in enumerate(plans) for t in plan if records[c][t.index] is None]
+
+    def finished_one(position: int, record: dict[str, Any]) -> None:
+        c, trial = todo[position]
+        records[c][trial.index] = record
+        with open(Path(specs[c].out) / JOURNAL, "a") as journal:
+            journal.write(json.dumps({"plan": trial.plan(), "record": record}) + "\n")
+
+    label = specs[0].mission if len(specs) == 1 else f"{len(specs)} campaigns"
+    run_trials([t for _, t in todo], workers, backend, address, ray_dir, console, label, finished_one)
+    return [_write_campaign(spec, [r for r in rs if r is not None], backend, worker_count(workers), n)
+            for spec, rs, n in zip(specs, records, resumed, strict=True)]
+
+
+def _write_campaign(spec: CampaignSpec, records: list[dict[str, Any]], backend: str, workers: int,
+                    resumed: int) -> dict[str, Any]:
+    """Write a finished campaign's ``trials.json``, ``trials.csv`` and ``summary.json``; returns the summary."""
+    summary = {
+        "mission": spec.mission,
+        "backend": backend,
+        "workers": workers,
+        "base_seed": spec.base_seed,
+        "set": dict(spec.overrides),
+        "vary": {k: list(v) for k, v in spec.vary.items()},
+        "until": spec.until,
+        "resumed_trials": resumed,
+        **summarize(records),
+        "groups": [
+            {"params": combo, **summarize([r for r in records if r["params"] == combo])}
+            for combo in _unique(r["params"] for r in records)
+        ] if spec.vary else [],
+    }
+    out = Path(spec.out)
+    (out / "trials.json").write_text(json.dumps(records, indent=2))
+    _write_csv(out / "trials.csv", records)
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    return summary
+
+
 def run_campaign(
     mission: str,
     trials: int,
@@ -253,53 +464,13 @@ def run_campaign(
     until: float | None = None,
     keep_logs: str = "failed",
     console: Console | None = None,
+    resume: bool = False,
 ) -> dict[str, Any]:
-    """Run a campaign and write ``trials.json``, ``trials.csv`` and ``summary.json`` in ``out``.
-
-    Returns the summary. Bad input (mission, overrides, backend) raises
-    :class:`MissionError` before any trial runs.
-    """
-    if backend not in BACKENDS:
-        raise MissionError(f"unknown backend '{backend}'", expected=f"one of {', '.join(BACKENDS)}")
-    out = Path(out)
-    workers = max(1, workers or os.cpu_count() or 1)
-    if backend == "ray" and not address:
-        ray_temp_dir(out)
-    plan = plan_trials(mission, trials, base_seed, overrides, vary, until, out / "logs", keep_logs)
-    out.mkdir(parents=True, exist_ok=True)
-    if keep_logs != "none":
-        (out / "logs").mkdir(exist_ok=True)
-    console = console or Console()
-    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
-    with Progress(*columns, console=console, disable=not console.is_terminal) as bar:
-        task = bar.add_task(f"{mission} ({backend})", total=len(plan))
-        failures = 0
-
-        def done(record: dict[str, Any]) -> None:
-            nonlocal failures
-            failures += 0 if record["success"] else 1
-            bar.update(task, advance=1, description=f"{mission} ({backend}, {failures} failed)")
-
-        records = _run_local(plan, workers, done) if backend == "local" else _run_ray(plan, workers, address, out, done)
-    records.sort(key=lambda r: r["trial"])
-    summary = {
-        "mission": mission,
-        "backend": backend,
-        "workers": workers,
-        "base_seed": base_seed,
-        "set": dict(overrides or {}),
-        "vary": {k: list(v) for k, v in (vary or {}).items()},
-        "until": until,
-        **summarize(records),
-        "groups": [
-            {"params": combo, **summarize([r for r in records if r["params"] == combo])}
-            for combo in _unique(r["params"] for r in records)
-        ] if vary else [],
-    }
-    (out / "trials.json").write_text(json.dumps(records, indent=2))
-    _write_csv(out / "trials.csv", records)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
-    return summary
+    """Run one campaign (:func:`run_campaigns`) and write ``trials.json``, ``trials.csv`` and ``summary.json`` in
+    ``out``; returns the summary."""
+    spec = CampaignSpec(mission, trials, Path(out), base_seed, dict(overrides or {}),
+                        {k: list(v) for k, v in (vary or {}).items()}, until, keep_logs)
+    return run_campaigns([spec], workers, backend, address, resume, console)[0]
 
 
 def _unique(items: Iterable[dict[str, str]]) -> list[dict[str, str]]:

@@ -494,6 +494,11 @@ def verify(log: str) -> None:
     show_default=True,
     help="Which trials keep their MCAP log.",
 )
+@click.option(
+    "--resume",
+    is_flag=True,
+    help="Read back the trials already finished in --out with the same plan; run only the others.",
+)
 def campaign(
     mission: str,
     trials: int,
@@ -506,6 +511,7 @@ def campaign(
     out: str,
     until: float | None,
     logs: str,
+    resume: bool,
 ) -> None:
     """Run independent seeded trials of MISSION in parallel; write trials.json/.csv and summary.json in --out."""
     from .campaign import run_campaign
@@ -525,9 +531,10 @@ def campaign(
                 address,
                 until,
                 logs,
+                resume=resume,
             )
     except KeyboardInterrupt:
-        _err.print("campaign interrupted: no summary written")
+        _err.print("campaign interrupted: no summary written (--resume continues it)")
         sys.exit(130)
     table = Table(title=f"campaign {mission} -> {out}", title_justify="left")
     for column in ("params", "trials", "success", "95% CI", "median sim time", "outcomes"):
