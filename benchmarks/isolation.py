@@ -49,6 +49,7 @@ def measure(mission: str, until: float | None, folder: Path) -> dict[str, Any]:
 
 
 def main() -> None:
+    """Measure, print the table, write the JSON (see the module docstring)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--mission", default=DEFAULT_MISSION)
     parser.add_argument("--until", type=float, help="time limit (sim s; default: the mission's)")
