@@ -64,10 +64,10 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.geometry import rotation_matrix
+from marsupial.trees.phases import phase_event
 from marsupial.trees.skill import NodeParams, Skill
 from marsupial.world.capabilities import HasArmModel, HasBase
 
-from ..uav_docking.team import phase_event
 from .base_drive import pursuit_step, turn_step
 from .insertion import level_insertion_tcp
 from .placement import RHO_M, CameraModel, Placement, PlacementParams, aim_camera, camera_goal, plan_placements

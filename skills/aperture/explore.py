@@ -42,11 +42,11 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field, field_validator, model_validator
 
+from marsupial.trees.phases import phase_event
 from marsupial.trees.skill import Condition, NodeParams, Skill
 from marsupial.world.capabilities import HasArmModel, HasBase
 
 from ..navigation import Footprint
-from ..uav_docking.team import phase_event
 from .approach import LOOK_POSES
 from .base_drive import pursuit_step, turn_step
 from .detection import DepthFrame

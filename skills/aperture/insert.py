@@ -51,11 +51,11 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.geometry import rotation_matrix, transform
+from marsupial.trees.phases import phase_event
 from marsupial.trees.skill import NodeParams, Skill
 from marsupial.world.capabilities import HasArmModel, HasGripper, HasScoutLauncher
 
 from ..uav_docking.ik_engine import ClosedFormIK
-from ..uav_docking.team import phase_event
 from ..uav_docking.trajectory import TrajectoryParams
 from .analyze import LAUNCH_PLANS
 from .arm_motion import ArmCollisionModel, ArmPlanParams, plan_arm_path

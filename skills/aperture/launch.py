@@ -35,7 +35,8 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
-from ..uav_docking.team import phase_event
+from marsupial.trees.phases import phase_event
+
 from .insert import INSERTION, ArmSkill, ArmSkillParams, Insertion
 from .insertion import HOLSTERS, T_HANDLE_TCP, cartesian_path, held_mav_pose, line_poses
 from .scan import VOLUMETRIC_MAP

@@ -31,10 +31,10 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.trees.phases import phase_event
 from marsupial.trees.skill import NodeParams, Skill
 from marsupial.world.capabilities import HasArmModel
 
-from ..uav_docking.team import phase_event
 from .belief import ApertureBelief, BeliefParams, aperture_region
 from .detection import DepthFrame, DetectionParams, detect_apertures, eye_in_hand_frame
 from .ranking import ApertureTrack, associate, rank_apertures

@@ -35,10 +35,10 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.trees.phases import phase_event
 from marsupial.trees.skill import NodeParams, Skill
 from marsupial.world.capabilities import HasArmModel, Rotorcraft
 
-from ..uav_docking.team import phase_event
 from .insertion import held_mav_pose
 
 

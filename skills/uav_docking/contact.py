@@ -74,6 +74,7 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.trees.phases import phase_event
 from marsupial.trees.skill import Condition, NodeParams, Skill
 from marsupial.world.capabilities import Rotorcraft
 
@@ -81,7 +82,7 @@ from .gust_guard import GuardLimits, GustGuard
 from .pose import invert
 from .relative_hold import PART_A_LINK, part_b_transform
 from .selection import yaw_of_rotation
-from .team import DOCKING_FLAG, PART_B_YAW, CarrierName, carrier_port, phase_event
+from .team import DOCKING_FLAG, PART_B_YAW, CarrierName, carrier_port
 from .track import CONTACT_TARGET, TRACKING, ContactTarget, TrackingState
 
 CAPTURE_TIME = 1.0  # s the magnet may take to bring Part B into contact before the capture is retried

@@ -74,6 +74,7 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.sensing import EstimateHistory, in_nav_frame, sensor_mount
+from marsupial.trees.phases import phase_event
 from marsupial.trees.skill import NodeParams, Skill, TeamMember
 from marsupial.world.capabilities import HasBase, Rotorcraft
 from marsupial.world.errors import UnknownNameError
@@ -91,7 +92,6 @@ from .coverage import (
     view_bearings,
     visible_cells,
 )
-from .team import phase_event
 
 D_E = 2.0  # m, D_e (§V-A): chosen — a stop per room-sized step; the front camera surveys ~4 m around each stop
 SOFT_ZONE = 1.0  # m inside the leash radius over which exploring blends into catching up with the carrier

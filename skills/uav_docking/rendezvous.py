@@ -33,12 +33,13 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.trees.phases import phase_event
 from marsupial.trees.skill import NodeParams, Skill
 from marsupial.world.capabilities import Rotorcraft
 
 from .observer import EyeInHandObserver, position_spread
 from .relative_hold import CarrierFrame, HoldGains, command_hold, relative_pose_of, target_above_part_a
-from .team import DOCKING_FLAG, UAV_POSE, CarrierName, carrier_port, phase_event
+from .team import DOCKING_FLAG, UAV_POSE, CarrierName, carrier_port
 
 SEARCH_JOINTS = (0, 4)  # arm joints swept by the search: base yaw (joint 1) and wrist pitch (joint 5)
 
