@@ -112,8 +112,8 @@ class _Closing:
     """Part A holds still below Part B (the gap changed by less than ``SETTLED_SPEED``)."""
     unsteady: bool
     """The gust guard holds Part A back."""
-    turned_unsteady: bool
-    """The guard has turned unsteady in this tick."""
+    abandoned: bool
+    """The gust guard turned unsteady in this tick and abandoned a capture under way (magnet off)."""
     switch: bool
     """The contact switch is closed (Part B seated on Part A)."""
     standoff: float
@@ -300,8 +300,7 @@ class Contact(Phased, Skill["Contact.Params"]):
         m = self.measure(state)
         if not isinstance(m, _Closing):
             return m
-        if m.turned_unsteady:  # the gust guard abandons the capture (its switch is open): not counted as failed
-            self.device.magnet_off()
+        if m.abandoned:  # by the gust guard (its switch is open): back to the approach, not counted as failed
             return go(self.Phase.APPROACH, event=None)
         if not m.switch and m.at - self.captured_at > CAPTURE_TIME:
             self.device.magnet_off()
@@ -341,12 +340,12 @@ class Contact(Phased, Skill["Contact.Params"]):
             return self.cancel(reason)
         lateral = math.hypot(float(p_B_A[0]), float(p_B_A[1]))
         aligned = lateral <= p.align_tolerance
-        unsteady, turned = self.supervise(now, gap, lateral, state)
+        unsteady, abandoned = self.supervise(now, gap, lateral, state)
         standoff = self.standoff(now, aligned, unsteady)
         settled = abs(gap - self.last_axial) <= SETTLED_SPEED * max(now - self.last_tick, 1e-9)
         self.last_axial, self.last_tick = gap, now
         switch = self.device.contact_switch
-        self.measured = _Closing(now, gap, aligned, settled, unsteady, turned, switch, standoff)
+        self.measured = _Closing(now, gap, aligned, settled, unsteady, abandoned, switch, standoff)
         return self.measured
 
     def hold_target(self) -> None:
@@ -381,9 +380,10 @@ class Contact(Phased, Skill["Contact.Params"]):
 
     def supervise(self, now: float, gap: float, lateral: float, state: TrackingState) -> tuple[bool, bool]:
         """The gust guard (:mod:`.gust_guard`): whether Part A must keep ``guard_gap`` below an unsteady UAV, and
-        whether the guard turned unsteady now (a capture under way is then abandoned, not counted as failed).
+        whether it abandoned a capture under way whose contact switch is still open (magnet off; not counted as
+        failed, :meth:`_step_capture` goes back to the approach).
 
-        Once the contact switch closed (Part B seated on the magnet) or the levers close, the guard no longer acts.
+        Once the switch closed (Part B seated on the magnet) or the levers close, the guard no longer acts.
         """
         p = self.params
         if p.guard_gap <= 0.0 or self.phase is self.Phase.LOCKING or self.device.contact_switch:
@@ -392,11 +392,14 @@ class Contact(Phased, Skill["Contact.Params"]):
         near = gap <= p.guard_gap + (GUARD_MARGIN if was else 0.0)  # farther down, a shove cannot reach Part A
         speed = float(np.linalg.norm(state.v_M))
         unsteady = self.guard.update(now, lateral if near else 0.0, speed if near else 0.0)
+        abandoned = unsteady and not was and self.phase is self.Phase.CAPTURE  # the switch is open (above)
+        if abandoned:
+            self.device.magnet_off()
         if unsteady and not was:
             self.guard_event("unsteady", why=self.guard.reason, gap_estimate=round(gap, 4))
         elif was and not unsteady:
             self.guard_event("calm", gap_estimate=round(gap, 4))
-        return unsteady, unsteady and not was
+        return unsteady, abandoned
 
     def guard_event(self, guard: str, **fields: object) -> None:
         """Record a change of the gust guard: a ``state_change`` event with ``guard`` and no ``phase`` (it stays)."""
