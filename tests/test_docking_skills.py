@@ -122,16 +122,16 @@ def test_an_occlusion_during_contact_cancels_and_asks_for_authorization_again(tm
             state: TrackingState | None = harness.blackboard("carrier/tracking")
             if state is not None and state.p_B_A is not None:
                 gaps.append((world.now, state.p_B_A[2], getattr(contact, "phase", None)))
-            if not occluded and getattr(contact, "phase", None) == "approach" and contact.t_c > 0.8:
+            if not occluded and getattr(contact, "phase", None) is Contact.Phase.APPROACH and contact.t_c > 0.8:
                 DisturbanceSchedule.of(world).occlude(uav, "tag_bundle", When(start=world.now, duration=3.0))
                 occluded.append(world.now)
 
         assert harness.run(root, 12.0, on_tick) == Status.RUNNING
-        assert occluded and contact.phase == "authorization_requested"  # waits: no contact without the operator
+        assert occluded and contact.phase is Contact.Phase.AUTHORIZATION_REQUESTED  # no contact without the operator
         cancelled_at = world.now
         channel.say("authorize_contact", why="marker back in view")
         harness.run(root, 1.0, on_tick)
-        assert contact.phase in ("settling", "approach")
+        assert contact.phase in (Contact.Phase.SETTLING, Contact.Phase.APPROACH)
         harness.stop(root)
         harness.close()
     log = read_log(tmp_path / "occlusion.mcap")

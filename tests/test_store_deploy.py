@@ -145,7 +145,7 @@ def test_deploy_hands_over_the_heading_the_uav_was_locked_with():
         harness = Harness(world)
         py_trees.blackboard.Blackboard.set("/carrier/part_b_yaw", math.pi)
         deploy = harness.node(Deploy, "uav")
-        while getattr(deploy, "phase", None) != "climb" and world.now < 10.0:  # up to the release
+        while getattr(deploy, "phase", None) is not Deploy.Phase.CLIMB and world.now < 10.0:  # up to the release
             assert harness.run(deploy, 0.1) == Status.RUNNING
         assert harness.blackboard("carrier/part_b_yaw") is None  # released: no UAV on Part A any more
         error = math.remainder(uav.estimator.estimate().yaw - yaw_of(uav.pose()[1]), math.tau)

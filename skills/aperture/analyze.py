@@ -37,9 +37,9 @@ from pydantic import Field
 
 from marsupial.api.capabilities import HasArmModel
 from marsupial.api.silhouette import mav_contour
+from marsupial.trees.phases import phase_event
 from marsupial.trees.skill import NodeParams, Skill
 
-from ..uav_docking.team import phase_event
 from .detection import DepthFrame, DetectionParams, detect_apertures
 from .launch_pose import LaunchParams, plan_launches
 from .profile import ProfileParams, profile_analysis

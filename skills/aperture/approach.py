@@ -58,6 +58,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
+from enum import Enum
 
 import numpy as np
 from py_trees.common import Status
@@ -65,9 +66,9 @@ from pydantic import Field
 
 from marsupial.api.capabilities import HasArmModel, HasBase
 from marsupial.geometry import rotation_matrix
+from marsupial.trees.phases import Phased, Transition, go, phase_event
 from marsupial.trees.skill import NodeParams, Skill
 
-from ..uav_docking.team import phase_event
 from .base_drive import pursuit_step, turn_step
 from .insertion import level_insertion_tcp
 from .placement import RHO_M, CameraModel, Placement, PlacementParams, aim_camera, camera_goal, plan_placements
@@ -88,7 +89,7 @@ PLACEMENT = "placement"
 """Blackboard key (under the robot's name) of the chosen :class:`~.placement.Placement`."""
 
 
-class ApproachAperture(Skill["ApproachAperture.Params"]):
+class ApproachAperture(Phased, Skill["ApproachAperture.Params"]):
     """Drive the MMS to a collision-free base placement from which its arm camera sees and reaches a ranked aperture."""
 
     class Params(NodeParams):
@@ -141,15 +142,30 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
         camera: str = "camera"
         """The eye-in-hand RGB-D camera."""
 
+    class Phase(Enum):
+        """The approach's phases, in their order (a drive again goes back to ``drive``)."""
+
+        LOOK = "look"
+        """The arm through the ground-looking poses, a depth frame from each into M."""
+        PLAN = "plan"
+        """Placements for the ranked aperture; the best is the goal."""
+        DRIVE = "drive"
+        """The base drives to the placement (pure pursuit on its estimate)."""
+        TURN = "turn"
+        """The base turns to the placement's heading."""
+        ARM = "arm"
+        """The arm to the viewing angles; once there, relocalise and re-aim (once)."""
+
     robot_kinds = (HasBase, HasArmModel)
     sensors = ("{camera}",)
     claims = ("base", "arm")
     reads = (f"{{robot}}/{APERTURES}", f"{{robot}}/{VOLUMETRIC_MAP}")
     writes = (f"{{robot}}/{PLACEMENT}",)
+    phase: Phase
 
     def start(self) -> None:
         self.placement: Placement | None = None
-        self.stage = "look"  # look → plan → drive → turn → arm
+        self.enter(go(self.Phase.LOOK, event=None))
         self.looks = [np.array(pose) + np.r_[pan, np.zeros(5)] for pose in self.params.look_poses
                       for pan in self.params.look_pan]
         self.arrived_at: float | None = None  # at the present ground-looking pose since
@@ -160,21 +176,34 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
         self.redrives = 0
 
     def step(self) -> Status:
-        if self.stage == "look":
-            return self._look()
-        if self.placement is None:
-            return self._plan()
-        goal = self.placement.pose
-        if self.stage != "arm" and self._move_base(goal):
+        return self.step_phase()
+
+    def _step_drive(self) -> Status | Transition:
+        """Drive to the placement's position; there, turn at once."""
+        assert self.placement is not None
+        p, goal = self.params, self.placement.pose
+        left = pursuit_step(self.robot, goal, p.max_speed, p.position_tolerance)
+        if left is not None:
+            self.feedback_message = f"driving to the placement: {left:.2f} m"
             return Status.RUNNING
+        return go(self.Phase.TURN, event=None, at_once=True)
+
+    def _step_turn(self) -> Status | Transition:
+        """Turn to the placement's heading; then the arm, at once."""
+        assert self.placement is not None
+        turning = turn_step(self.robot, float(self.placement.pose[2]), self.params.yaw_tolerance)
+        if turning is not None:
+            self.feedback_message = f"turning to the placement's heading: {turning:+.2f} rad"
+            return Status.RUNNING
+        return go(self.Phase.ARM, event=None, at_once=True)
+
+    def _step_arm(self) -> Status | Transition:
+        """The base stands at the placement: the arm to the viewing angles, then relocalise and re-aim once."""
+        assert self.placement is not None
+        goal = self.placement.pose
         estimate = self.robot.estimate()
         distance = float(np.hypot(*(goal[:2] - estimate.position[:2])))
         yaw_error = math.remainder(goal[2] - estimate.yaw, math.tau)
-        return self._at_placement(distance, yaw_error)
-
-    def _at_placement(self, distance: float, yaw_error: float) -> Status:
-        """The base stands at the placement: the arm to the viewing angles, then relocalise and re-aim once."""
-        assert self.placement is not None
         p = self.params
         view_q = self.placement.q if self.view_q is None else self.view_q
         self.robot.set_joint_targets(view_q)
@@ -195,29 +224,14 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
             if p.relocalize and not self._relocalize():
                 return Status.RUNNING
             self.settled = True
-            if self._redrive():
-                return Status.RUNNING
+            redrive = self._redrive()
+            if redrive is not None:
+                return redrive
             if p.reaim and self._reaim():
                 self.feedback_message = "re-aiming the camera at the placement's goal"
                 return Status.RUNNING
         self.feedback_message = f"at the placement ({distance:.2f} m, {yaw_error:+.2f} rad off), aperture in view"
         return Status.SUCCESS
-
-    def _move_base(self, goal: np.ndarray) -> bool:
-        """Drive, then turn, to the placement ``goal`` ``(x, y, yaw)``; False once there (stage ``arm``)."""
-        p = self.params
-        if self.stage == "drive":
-            left = pursuit_step(self.robot, goal, p.max_speed, p.position_tolerance)
-            if left is not None:
-                self.feedback_message = f"driving to the placement: {left:.2f} m"
-                return True
-            self.stage = "turn"
-        turning = turn_step(self.robot, float(goal[2]), p.yaw_tolerance)
-        if turning is not None:
-            self.feedback_message = f"turning to the placement's heading: {turning:+.2f} rad"
-            return True
-        self.stage = "arm"
-        return False
 
     def _relocalize(self) -> bool:
         """Register one fresh depth frame from the viewing pose against M's surface and correct the base estimate
@@ -232,10 +246,10 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
         phase_event(self, "relocalized", correction=found.summary() if found is not None else None)
         return True
 
-    def _redrive(self) -> bool:
-        """Whether the base must drive to the placement again: it lies more than ``redrive_distance`` ahead of the
-        corrected estimate, within 30° of its heading (never behind: pure pursuit would turn the base about with
-        the arm out at the wall), at most ``max_redrives`` times."""
+    def _redrive(self) -> Transition | None:
+        """Back to ``drive`` when the placement lies more than ``redrive_distance`` ahead of the corrected
+        estimate, within 30° of its heading (never behind: pure pursuit would turn the base about with the arm out
+        at the wall), at most ``max_redrives`` times; else ``None``."""
         assert self.placement is not None
         p = self.params
         estimate = self.robot.estimate()
@@ -243,14 +257,13 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
         c, s = math.cos(estimate.yaw), math.sin(estimate.yaw)
         ahead, aside = c * offset[0] + s * offset[1], -s * offset[0] + c * offset[1]
         if self.redrives >= p.max_redrives or ahead <= p.redrive_distance:
-            return False
+            return None
         if abs(math.atan2(aside, ahead)) > REDRIVE_CONE:
-            return False
+            return None
         self.redrives += 1
-        self.stage, self.placed_at, self.settled = "drive", None, False
-        phase_event(self, "redrive", distance=round(float(np.hypot(*offset)), 3))
+        self.placed_at, self.settled = None, False
         self.feedback_message = f"driving to the placement again: {float(np.hypot(*offset)):.2f} m"
-        return True
+        return go(self.Phase.DRIVE, event="redrive", distance=round(float(np.hypot(*offset)), 3))
 
     def _reaim(self) -> bool:
         """Solve the camera's goal again from the base estimate (:func:`~.placement.aim_camera`); True when the arm
@@ -273,16 +286,15 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
         self.view_q = q
         return True
 
-    def _look(self) -> Status:
-        """Move through the ground-looking poses; one new depth frame from each goes into M."""
+    def _step_look(self) -> Status | Transition:
+        """Move through the ground-looking poses; one new depth frame from each goes into M; then plan at once."""
         occupancy = self.read(f"{self.robot_name}/{VOLUMETRIC_MAP}")
         if occupancy is None:
             self.robot.stop()
             self.feedback_message = "waiting for ranked apertures and the map (aperture_scan)"
             return Status.RUNNING
         if not self.looks:
-            self.stage = "plan"
-            return self._plan()
+            return go(self.Phase.PLAN, event=None, at_once=True)
         target = self.looks[0]
         self.robot.set_joint_targets(target)
         if float(np.max(np.abs(self.robot.joint_positions() - target))) > self.params.joint_tolerance:
@@ -306,7 +318,7 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
             return []
         return [level_insertion_tcp(target, normal, offset) for offset in (self.params.standoff, -depth)]
 
-    def _plan(self) -> Status:
+    def _step_plan(self) -> Status | Transition:
         """Placements for the chosen aperture from the scan's M; the best is the goal."""
         p = self.params
         ranked = self.read(f"{self.robot_name}/{APERTURES}")
@@ -336,9 +348,9 @@ class ApproachAperture(Skill["ApproachAperture.Params"]):
             why = ", ".join(f"{reason} {n}" for reason, n in refused.most_common())
             self.feedback_message = f"no feasible base placement among {p.samples} samples in the cone ({why})"
             return Status.FAILURE
-        self.placement, self.stage = placements[0], "drive"
+        self.placement = placements[0]
         self.camera_R = camera_goal(aperture.m_A, aperture.normal_nav, p.standoff)[1]
         self.write(f"{self.robot_name}/{PLACEMENT}", self.placement)
         self.robot.stop()
         self.feedback_message = f"placement chosen among {len(placements)} feasible"
-        return Status.RUNNING
+        return go(self.Phase.DRIVE, event=None)

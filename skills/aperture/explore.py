@@ -37,6 +37,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass, field
+from enum import Enum
 from typing import Any, ClassVar
 
 import numpy as np
@@ -44,10 +45,10 @@ from py_trees.common import Status
 from pydantic import Field, field_validator, model_validator
 
 from marsupial.api.capabilities import HasArmModel, HasBase
+from marsupial.trees.phases import Phased, Transition, go, phase_event
 from marsupial.trees.skill import Condition, NodeParams, Skill
 
 from ..navigation import Footprint
-from ..uav_docking.team import phase_event
 from .approach import LOOK_POSES
 from .base_drive import pursuit_step, turn_step
 from .detection import DepthFrame
@@ -81,7 +82,7 @@ def base_pose(robot: Any) -> tuple[np.ndarray, float]:
     return np.array([*estimate.position[:2], estimate.yaw]), float(estimate.position[2])
 
 
-class ExploreVolume(Skill["ExploreVolume.Params"]):
+class ExploreVolume(Phased, Skill["ExploreVolume.Params"]):
     """Explore the bounded volume V with the eye-in-hand camera, next best view after view, until stuck."""
 
     class Params(NodeParams):
@@ -163,10 +164,31 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
                                  f"{MAX_VOXELS:.0e} (a smaller V or a coarser resolution)")
             return self
 
+    class Phase(Enum):
+        """look → plan → fold → face → drive → turn → look …; stuck: [fold → face → drive → turn →] end [→ final]."""
+
+        LOOK = "look"
+        """The arm through the look-around's poses, a depth frame from each into M."""
+        PLAN = "plan"
+        """The next best view, or stuck."""
+        FOLD = "fold"
+        """The arm back to its travelling angles."""
+        FACE = "face"
+        """The base turns toward the viewpoint."""
+        DRIVE = "drive"
+        """The base drives to it."""
+        TURN = "turn"
+        """The base turns to its heading."""
+        END = "end"
+        """Stuck: the arm folded, the base turns to ``end_yaw``."""
+        FINAL = "final"
+        """Stuck, back at the start: one level frame registered against M."""
+
     robot_kinds = (HasBase, HasArmModel)
     sensors = ("{camera}",)
     claims = ("base", "arm")
     writes = (f"{{robot}}/{VOLUMETRIC_MAP}", f"{{robot}}/{EXPLORATION}")
+    phase: Phase
 
     def start(self) -> None:
         p = self.params
@@ -177,7 +199,7 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
         self.record: ExplorationRecord | None = None
         self.goal: Viewpoint | None = None
         self.returning = False  # stuck, on the way back to the first view
-        self.stage = "look"  # look → plan → fold → face → drive → turn → look …; stuck: [fold … turn] end [final]
+        self.enter(go(self.Phase.LOOK, event=None))
         self._new_look()
 
     def _new_look(self) -> None:
@@ -190,17 +212,9 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
         self.arrived_at: float | None = None
 
     def step(self) -> Status:
-        if self.stage == "look":
-            return self._look()
-        if self.stage == "plan":
-            return self._plan()
-        if self.stage in ("fold", "end"):
-            return self._fold()
-        if self.stage == "final":
-            return self._final()
-        return self._go()
+        return self.step_phase()
 
-    def _look(self) -> Status:
+    def _step_look(self) -> Status | Transition:
         """The arm through the look-around's poses; one new depth frame from each into M."""
         left = len(self.looks) - self.look_index
         self.feedback_message = f"looking around: {left} views to go"
@@ -217,7 +231,7 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
         self.look_index += 1
         self.arrived_at = None
         if self.look_index == len(self.looks):
-            self.stage = "plan"
+            return go(self.Phase.PLAN, event=None)
         return Status.RUNNING
 
     def _frame_at(self, target: np.ndarray) -> DepthFrame | None:
@@ -254,7 +268,7 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
                                  view_range=p.view_range, half_fov=(half_h, half_v), lam=p.lam,
                                  stuck_gain=p.stuck_gain, footprint=p.footprint, horizon=p.horizon)
 
-    def _plan(self) -> Status:
+    def _step_plan(self) -> Status | Transition:
         """The next best view, or stuck."""
         assert self.record is not None, "the look-around's level view gives the camera offset"
         pose, z = base_pose(self.robot)
@@ -268,47 +282,51 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
         if not views:
             self.record.stuck = True
             phase_event(self, "exploration_stuck", views=len(self.record.visited), unknown_m3=round(unknown, 3))
-            self._end(pose, z)
-            return Status.RUNNING
+            return self._end(pose, z)
         if len(self.record.visited) >= self.params.max_views:
             self.feedback_message = (f"not stuck after {len(self.record.visited)} views: {len(views)} still offer "
                                      f"up to {views[0].gain:.2f} m³ ({unknown:.2f} m³ unknown in V)")
             return Status.FAILURE
         self.goal = views[0]
-        phase_event(self, "explore_goal", goal=self.goal.summary(), feasible=len(views))
-        self.stage = "fold"
-        return Status.RUNNING
+        return go(self.Phase.FOLD, event="explore_goal", goal=self.goal.summary(), feasible=len(views))
 
-    def _end(self, pose: np.ndarray, z: float) -> None:
+    def _end(self, pose: np.ndarray, z: float) -> Transition:
         """Stuck: back to the first view's pose (``end_at_start``, if the drive is clear in M), else end here."""
         assert self.record is not None
         first = self.record.visited[0]
         far = np.hypot(*(first[:2] - pose[:2])) > self.params.position_tolerance
         if self.params.end_at_start and far and drive_clear(self.occupancy, pose, first, self.record.params, z):
             self.goal, self.returning = Viewpoint(first, 0.0, 0.0, 0.0), True
-            phase_event(self, "explore_return", goal=self.goal.summary())
-            self.stage = "fold"
-        else:
-            self.stage = "end"
+            return go(self.Phase.FOLD, event="explore_return", goal=self.goal.summary())
+        return go(self.Phase.END, event=None)
 
-    def _fold(self) -> Status:
-        """The arm back to its travelling angles; then on to the viewpoint (or, stuck, the final turn)."""
+    def _folded(self) -> bool:
+        """Stop the base, hold the arm at its travelling angles; whether it is there."""
         self.robot.stop()
         self.robot.set_joint_targets(self.fold)
         error = float(np.max(np.abs(self.robot.joint_positions() - self.fold)))
         if error > self.params.joint_tolerance:
             self.feedback_message = f"folding the arm: {error:.3f} rad"
+            return False
+        return True
+
+    def _step_fold(self) -> Status | Transition:
+        """The arm back to its travelling angles; then on to the viewpoint."""
+        if not self._folded():
             return Status.RUNNING
-        if self.stage == "fold":
-            self.stage = "face"
+        return go(self.Phase.FACE, event=None)
+
+    def _step_end(self) -> Status | Transition:
+        """Stuck, the arm folded: the final turn, then (back at the start, ``relocalize``) the final frame."""
+        if not self._folded():
             return Status.RUNNING
         end_yaw = self.params.end_yaw
         if end_yaw is not None and turn_step(self.robot, end_yaw, self.params.yaw_tolerance) is not None:
             self.feedback_message = "stuck: turning to the final heading"
             return Status.RUNNING
         if self.returning and self.params.relocalize:
-            self.stage, self.arrived_at = "final", None
-            return Status.RUNNING
+            self.arrived_at = None
+            return go(self.Phase.FINAL, event=None)
         return self._stuck()
 
     def _stuck(self) -> Status:
@@ -316,7 +334,7 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
         self.feedback_message = f"stuck after {len(self.record.visited)} views: no reachable view offers gain"
         return Status.SUCCESS
 
-    def _final(self) -> Status:
+    def _step_final(self) -> Status:
         """Back at the start: the arm at the level pose, one frame registered against M (the drive back drifted)."""
         self.feedback_message = "stuck, back at the start: relocalising against M"
         frame = self._frame_at(np.asarray(self.params.level_pose, dtype=float))
@@ -325,33 +343,38 @@ class ExploreVolume(Skill["ExploreVolume.Params"]):
         self._relocalize(frame)
         return self._stuck()
 
-    def _go(self) -> Status:
-        """Turn toward the viewpoint, drive there, turn to its heading; then look around."""
+    def _step_face(self) -> Status | Transition:
+        """Turn toward the viewpoint; then drive there at once."""
         assert self.goal is not None
         p, goal = self.params, self.goal.pose
         pose, _ = base_pose(self.robot)
         offset = goal[:2] - pose[:2]
-        if self.stage == "face":
-            heading = math.atan2(offset[1], offset[0]) if np.hypot(*offset) > p.position_tolerance else pose[2]
-            if turn_step(self.robot, heading, p.yaw_tolerance) is not None:
-                self.feedback_message = "turning toward the next view"
-                return Status.RUNNING
-            self.stage = "drive"
-        if self.stage == "drive":
-            left = pursuit_step(self.robot, goal, p.max_speed, p.position_tolerance)
-            if left is not None:
-                self.feedback_message = f"driving to the next view: {left:.2f} m"
-                return Status.RUNNING
-            self.stage = "turn"
-        if turn_step(self.robot, float(goal[2]), p.yaw_tolerance) is not None:
+        heading = math.atan2(offset[1], offset[0]) if np.hypot(*offset) > p.position_tolerance else pose[2]
+        if turn_step(self.robot, heading, p.yaw_tolerance) is not None:
+            self.feedback_message = "turning toward the next view"
+            return Status.RUNNING
+        return go(self.Phase.DRIVE, event=None, at_once=True)
+
+    def _step_drive(self) -> Status | Transition:
+        """Drive to the viewpoint (pure pursuit on the estimate); then turn to its heading at once."""
+        assert self.goal is not None
+        p, goal = self.params, self.goal.pose
+        left = pursuit_step(self.robot, goal, p.max_speed, p.position_tolerance)
+        if left is not None:
+            self.feedback_message = f"driving to the next view: {left:.2f} m"
+            return Status.RUNNING
+        return go(self.Phase.TURN, event=None, at_once=True)
+
+    def _step_turn(self) -> Status | Transition:
+        """Turn to the viewpoint's heading; then look around (or, back at the start, end)."""
+        assert self.goal is not None
+        if turn_step(self.robot, float(self.goal.pose[2]), self.params.yaw_tolerance) is not None:
             self.feedback_message = "turning to the next view's heading"
             return Status.RUNNING
         if self.returning:
-            self.stage = "end"
-            return Status.RUNNING
-        self.stage = "look"
+            return go(self.Phase.END, event=None)
         self._new_look()
-        return Status.RUNNING
+        return go(self.Phase.LOOK, event=None)
 
 
 class ExplorationStuck(Condition["ExplorationStuck.Params"]):

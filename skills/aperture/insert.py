@@ -45,6 +45,7 @@ from __future__ import annotations
 
 from collections import Counter
 from dataclasses import dataclass
+from enum import Enum
 
 import numpy as np
 from py_trees.common import Status
@@ -52,10 +53,10 @@ from pydantic import Field
 
 from marsupial.api.capabilities import HasArmModel, HasGripper, HasScoutLauncher
 from marsupial.geometry import rotation_matrix, transform
+from marsupial.trees.phases import Phased, Transition, go, phase_event
 from marsupial.trees.skill import NodeParams, Skill
 
 from ..uav_docking.ik_engine import ClosedFormIK
-from ..uav_docking.team import phase_event
 from ..uav_docking.trajectory import TrajectoryParams
 from .analyze import LAUNCH_PLANS
 from .arm_motion import ArmCollisionModel, ArmPlanParams, plan_arm_path
@@ -141,7 +142,7 @@ class ArmSkillParams(NodeParams):
 
 
 class ArmSkill(Skill[ArmSkillParams]):
-    """Shared machinery of ``insert_scout`` and ``launch_scout``: frames, models and the stage runner."""
+    """Shared machinery of ``insert_scout`` and ``launch_scout``: frames, models and the arm's motions."""
 
     robot_kinds = (HasArmModel, HasGripper, HasScoutLauncher)
     claims = ("arm", "gripper")
@@ -208,7 +209,7 @@ class ArmSkill(Skill[ArmSkillParams]):
         return False
 
 
-class InsertScout(ArmSkill):
+class InsertScout(Phased, ArmSkill):
     """Grasp a launching apparatus from its holster and insert its MAV through the aperture (grasp, Phases I–II)."""
 
     class Params(ArmSkillParams):
@@ -224,9 +225,28 @@ class InsertScout(ArmSkill):
         grip_timeout: float = Field(3.0, gt=0.0)
         """Seconds the fingers have to close on the handle."""
 
+    class Phase(Enum):
+        """What to do once the present motion has ended (module docstring, stages 1–4)."""
+
+        PLAN_GRASP = "plan_grasp"
+        """Plan the motion to above the holster and the descent onto the handle; move."""
+        DESCEND = "descend"
+        """Open the fingers, descend onto the handle."""
+        GRIP = "grip"
+        """Close the fingers until they hold the handle; lift the apparatus out of the holster."""
+        PLAN_LAUNCH = "plan_launch"
+        """Plan Phases I–III from the launch plans; Phase I's free motion."""
+        ENTER = "enter"
+        """Phase I's straight end, onto the aperture plane."""
+        SLIP = "slip"
+        """Phase II, the slip through the aperture."""
+        DONE = "done"
+        """The MAV is past the aperture: hand the insertion over to ``launch_scout``."""
+
     params: Params
     reads = (f"{{robot}}/{LAUNCH_PLANS}", f"{{robot}}/{VOLUMETRIC_MAP}")
     writes = (f"{{robot}}/{INSERTION}",)
+    phase: Phase
 
     def start(self) -> None:
         super().start()
@@ -234,20 +254,20 @@ class InsertScout(ArmSkill):
             raise ValueError(f"holster must be one of {', '.join(HOLSTERS)}, got {self.params.holster!r}")
         self.stowed = list(self.params.stowed) or [h for h in HOLSTERS if h != self.params.holster]
         self.view_q = self.robot.joint_positions()  # the approach's viewing pose: faces the aperture
-        self.stage = "plan_grasp"
+        self.enter(go(self.Phase.PLAN_GRASP, event=None))
         self.grip_since: float | None = None
 
     def step(self) -> Status:
         if self.moving():
             return Status.RUNNING
-        return getattr(self, f"_{self.stage}")()
+        return self.step_phase()
 
     def _fail(self, why: str) -> Status:
         self.feedback_message = why
         phase_event(self, "insertion_failed", reason=why)
         return Status.FAILURE
 
-    def _plan_grasp(self) -> Status:
+    def _step_plan_grasp(self) -> Status | Transition:
         q0 = self.robot.joint_positions()
         T_above = self.above(self.params.holster)
         solution = self.ik.solve(T_above[:3, 3][None], T_above[:3, :3][None], q0)
@@ -262,30 +282,26 @@ class InsertScout(ArmSkill):
             return self._fail(f"no collision-free path to {self.params.holster}")
         self.descent: np.ndarray = descent
         self.run(path, False, f"to {self.params.holster}")
-        self.stage = "descend"
-        return Status.RUNNING
+        return go(self.Phase.DESCEND, event=None)
 
-    def _descend(self) -> Status:
+    def _step_descend(self) -> Status | Transition:
         self.robot.open_gripper()
         self.run(np.vstack((self.q_above, self.descent)), True, "onto the handle")
-        self.stage = "grip"
-        return Status.RUNNING
+        return go(self.Phase.GRIP, event=None)
 
-    def _grip(self) -> Status:
+    def _step_grip(self) -> Status | Transition:
         self.robot.close_gripper()
         if self.grip_since is None:
             self.grip_since = self.now
         if abs(self.robot.gripper_opening() - HANDLE_WIDTH_M) <= 0.002:
-            phase_event(self, "grasped", holster=self.params.holster)
             self.run(np.vstack((self.descent[::-1], self.q_above)), True, "lifting the apparatus")
-            self.stage = "plan_launch"
-            return Status.RUNNING
+            return go(self.Phase.PLAN_LAUNCH, event="grasped", holster=self.params.holster)
         if self.now - self.grip_since > self.params.grip_timeout:
             return self._fail(f"the gripper did not close on the handle (gap {self.robot.gripper_opening():.3f} m)")
         self.feedback_message = f"gripping: gap {self.robot.gripper_opening():.3f} m"
         return Status.RUNNING
 
-    def _plan_launch(self) -> Status:
+    def _step_plan_launch(self) -> Status | Transition:
         plans = self.read(f"{self.robot_name}/{LAUNCH_PLANS}") or []
         if not plans:
             return self._fail("no launch plans (analyze_aperture)")
@@ -299,14 +315,7 @@ class InsertScout(ArmSkill):
             if not branches:
                 refused["approach out of reach"] += 1
                 continue
-            phases: LaunchPhases | str = ""
-            for q_approach in branches:  # the arm's IK branches at the approach pose, nearest the viewing pose first
-                if not model.free(q_approach):
-                    phases = phases or f"approach {' & '.join(model.contacts(q_approach)) or 'joint limits'}"
-                    continue
-                phases = launch_phases(model, self.ik, plan, self.T_M_nav, q_approach, p.standoff, shallow, D_L_M)
-                if isinstance(phases, LaunchPhases):
-                    break
+            phases = self.launch_phases(model, plan, branches, shallow)
             if isinstance(phases, str):
                 refused[phases] += 1
                 continue
@@ -317,12 +326,28 @@ class InsertScout(ArmSkill):
             self.insertion = Insertion(p.holster, tuple(self.stowed), plan, phases, self.q_above, self.view_q,
                                        self.T_M_nav)
             phase_event(self, "insertion_plan", tried=tried, depth=round(phases.goals.depth, 3), plan=plan.summary())
-            phase_event(self, "phase1")
             self.run(path, False, "phase I: to the approach pose", fine=True)  # the entry starts on the plan
-            self.stage = "enter"
-            return Status.RUNNING
+            return go(self.Phase.ENTER, event="phase1")
         why = ", ".join(f"{reason} {n}" for reason, n in sorted(refused.items()))
         return self._fail(f"none of {len(plans)} launch plans has collision-free Phases I-III ({why})")
+
+    def launch_phases(self, model: ArmCollisionModel, plan: LaunchPlan, branches: list[np.ndarray], shallow: float
+                      ) -> LaunchPhases | str:
+        """Phases I–III of ``plan`` (:func:`~.insertion.launch_phases`, Phase II at least ``shallow`` m deep) from
+        the first of the arm's IK ``branches`` at the approach pose (nearest the viewing pose first) from which they
+        plan; else why not: the last planned branch's refusal, or, every branch blocked, the first one's contacts."""
+        why: str | None = None
+        for q_approach in branches:
+            if not model.free(q_approach):
+                why = why or f"approach {' & '.join(model.contacts(q_approach)) or 'joint limits'}"
+                continue
+            phases = launch_phases(model, self.ik, plan, self.T_M_nav, q_approach, self.params.standoff, shallow,
+                                   D_L_M)
+            if isinstance(phases, LaunchPhases):
+                return phases
+            why = phases
+        assert why is not None, "at least one branch"
+        return why
 
     def phase1_path(self, model: ArmCollisionModel, q_approach: np.ndarray, key: str) -> np.ndarray | None:
         """Phase I's free motion (rad) from above the holster to ``q_approach``: RRT* straight there, else through
@@ -340,18 +365,15 @@ class InsertScout(ArmSkill):
         valid = q[0][ok[0]]
         return list(valid[np.argsort(np.sum((valid - self.view_q) ** 2, axis=1))])
 
-    def _enter(self) -> Status:
+    def _step_enter(self) -> Status | Transition:
         self.run(self.insertion.phases.entry, True, "phase I: onto the aperture plane", fine=True)
-        self.stage = "slip"
-        return Status.RUNNING
+        return go(self.Phase.SLIP, event=None)
 
-    def _slip(self) -> Status:
-        phase_event(self, "phase2", depth=round(self.insertion.phases.goals.depth, 3))
+    def _step_slip(self) -> Status | Transition:
         self.run(self.insertion.phases.slip, True, "phase II: slipping through", fine=True)
-        self.stage = "done"
-        return Status.RUNNING
+        return go(self.Phase.DONE, event="phase2", depth=round(self.insertion.phases.goals.depth, 3))
 
-    def _done(self) -> Status:
+    def _step_done(self) -> Status:
         self.write(f"{self.robot_name}/{INSERTION}", self.insertion)
         self.feedback_message = f"the MAV is {self.insertion.phases.goals.depth:.2f} m past the aperture plane"
         return Status.SUCCESS

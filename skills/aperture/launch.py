@@ -31,17 +31,20 @@ the viewing pose.
 
 from __future__ import annotations
 
+from enum import Enum
+
 import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
-from ..uav_docking.team import phase_event
+from marsupial.trees.phases import Phased, Transition, go
+
 from .insert import INSERTION, ArmSkill, ArmSkillParams, Insertion
 from .insertion import HOLSTERS, T_HANDLE_TCP, cartesian_path, held_mav_pose, line_poses
 from .scan import VOLUMETRIC_MAP
 
 
-class LaunchScout(ArmSkill):
+class LaunchScout(Phased, ArmSkill):
     """Turn the inserted MAV to its launch attitude, let it go, and bring the empty apparatus back to its holster."""
 
     class Params(ArmSkillParams):
@@ -54,13 +57,34 @@ class LaunchScout(ArmSkill):
         clear_timeout: float = Field(15.0, gt=0.0)
         """Seconds the MAV has to leave before the skill fails."""
 
+    class Phase(Enum):
+        """What to do once the present motion has ended (module docstring, stages 1–4)."""
+
+        TURN = "turn"
+        """Phase III, the turn to the launch attitude."""
+        LAUNCH = "launch"
+        """Hold still ``settle`` s, then let the MAV go."""
+        CLEAR = "clear"
+        """Wait for the MAV to climb ``clear_height`` off; then back through the aperture."""
+        TO_HOLSTER = "to_holster"
+        """The free motion to above the holster."""
+        DESCEND = "descend"
+        """Down onto the holster with the apparatus."""
+        LET_GO = "let_go"
+        """Open the fingers (the apparatus latches into its holster); lift off."""
+        TO_VIEW = "to_view"
+        """The free motion back to the viewing pose."""
+        DONE = "done"
+        """The apparatus is stowed, the arm at the viewing pose."""
+
     params: Params
     reads = (f"{{robot}}/{INSERTION}", f"{{robot}}/{VOLUMETRIC_MAP}")
+    phase: Phase
 
     def start(self) -> None:
         super().start()
         self.insertion: Insertion | None = self.read(f"{self.robot_name}/{INSERTION}")
-        self.stage = "turn"
+        self.enter(go(self.Phase.TURN, event=None))
         self.since = self.now
         self.released_at: np.ndarray | None = None
 
@@ -71,7 +95,7 @@ class LaunchScout(ArmSkill):
             return Status.RUNNING
         if self.moving():
             return Status.RUNNING
-        return getattr(self, f"_{self.stage}")()
+        return self.step_phase()
 
     @property
     def inserted(self) -> Insertion:
@@ -83,13 +107,13 @@ class LaunchScout(ArmSkill):
         message = self.link.latest(self.params.scout)
         return None if message is None else np.asarray(message.payload.position, dtype=float)
 
-    def _turn(self) -> Status:
-        phase_event(self, "phase3", roll=round(self.inserted.plan.roll, 4), pitch=round(self.inserted.plan.pitch, 4))
+    def _step_turn(self) -> Status | Transition:
         self.run(self.inserted.phases.turn, True, "phase III: to the launch attitude", fine=True)
-        self.stage, self.since = "launch", -1.0
-        return Status.RUNNING
+        self.since = -1.0
+        return go(self.Phase.LAUNCH, event="phase3", roll=round(self.inserted.plan.roll, 4),
+                  pitch=round(self.inserted.plan.pitch, 4))
 
-    def _launch(self) -> Status:
+    def _step_launch(self) -> Status | Transition:
         if self.since < 0.0:
             self.since = self.now
         self.robot.hold_arm()
@@ -102,28 +126,26 @@ class LaunchScout(ArmSkill):
         self.robot.release_scout()
         position, _ = held_mav_pose(self.robot)
         self.released_at = position
-        phase_event(self, "launched", scout=self.params.scout, position=[round(float(x), 3) for x in position])
-        self.stage, self.since = "clear", self.now
-        return Status.RUNNING
+        self.since = self.now
+        return go(self.Phase.CLEAR, event="launched", scout=self.params.scout,
+                  position=[round(float(x), 3) for x in position])
 
-    def _clear(self) -> Status:
+    def _step_clear(self) -> Status | Transition:
         position = self._scout_position()
         assert self.released_at is not None
         climbed = -np.inf if position is None else float(position[2] - self.released_at[2])
         if climbed >= self.params.clear_height:
-            phase_event(self, "cleared", scout=self.params.scout, climbed=round(climbed, 3))
             phases = self.inserted.phases
             back = np.vstack((phases.turn[::-1], phases.slip[::-1], phases.entry[::-1]))
             self.run(back, True, "retreating through the aperture", fine=True)
-            self.stage = "to_holster"
-            return Status.RUNNING
+            return go(self.Phase.TO_HOLSTER, event="cleared", scout=self.params.scout, climbed=round(climbed, 3))
         if self.now - self.since > self.params.clear_timeout:
             self.feedback_message = f"{self.params.scout} has not left in {self.params.clear_timeout:.0f} s"
             return Status.FAILURE
         self.feedback_message = f"waiting for {self.params.scout} to climb off ({climbed:+.2f} m)"
         return Status.RUNNING
 
-    def _to_holster(self) -> Status:
+    def _step_to_holster(self) -> Status | Transition:
         holster = self.inserted.holster
         model = self.model(True, False, list(self.inserted.stowed), self.inserted.plan)
         q_above = self.inserted.above_holster
@@ -135,34 +157,29 @@ class LaunchScout(ArmSkill):
             return Status.FAILURE
         self.descent: np.ndarray = descent
         self.run(path, False, f"back to {holster}")
-        self.stage = "descend"
-        return Status.RUNNING
+        return go(self.Phase.DESCEND, event=None)
 
-    def _descend(self) -> Status:
+    def _step_descend(self) -> Status | Transition:
         self.run(np.vstack((self.inserted.above_holster, self.descent)), True, "putting the apparatus back")
-        self.stage = "let_go"
-        return Status.RUNNING
+        return go(self.Phase.LET_GO, event=None)
 
-    def _let_go(self) -> Status:
+    def _step_let_go(self) -> Status | Transition:
         self.robot.open_gripper()
         if self.robot.gripper_opening() < 0.06:
             self.feedback_message = f"opening the gripper: {self.robot.gripper_opening():.3f} m"
             return Status.RUNNING
-        phase_event(self, "stowed", holster=self.inserted.holster)
         self.run(np.vstack((self.descent[::-1], self.inserted.above_holster)), True, "lifting off the holster")
-        self.stage = "to_view"
-        return Status.RUNNING
+        return go(self.Phase.TO_VIEW, event="stowed", holster=self.inserted.holster)
 
-    def _to_view(self) -> Status:
+    def _step_to_view(self) -> Status | Transition:
         model = self.model(False, False, list(HOLSTERS))
         path = self.free_path(model, self.robot.joint_positions(), self.inserted.view_q, "to_view")
         if path is None:
             self.feedback_message = "no collision-free path back to the viewing pose"
             return Status.FAILURE
         self.run(path, False, "back to the viewing pose")
-        self.stage = "done"
-        return Status.RUNNING
+        return go(self.Phase.DONE, event=None)
 
-    def _done(self) -> Status:
+    def _step_done(self) -> Status:
         self.feedback_message = f"{self.params.scout} launched, the apparatus back in {self.inserted.holster}"
         return Status.SUCCESS

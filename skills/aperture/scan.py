@@ -32,9 +32,9 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.api.capabilities import HasArmModel
+from marsupial.trees.phases import phase_event
 from marsupial.trees.skill import NodeParams, Skill
 
-from ..uav_docking.team import phase_event
 from .belief import ApertureBelief, BeliefParams, aperture_region
 from .detection import DepthFrame, DetectionParams, detect_apertures, eye_in_hand_frame
 from .ranking import ApertureTrack, associate, rank_apertures

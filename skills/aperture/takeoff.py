@@ -36,9 +36,9 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.api.capabilities import HasArmModel, Rotorcraft
+from marsupial.trees.phases import phase_event
 from marsupial.trees.skill import NodeParams, Skill
 
-from ..uav_docking.team import phase_event
 from .insertion import held_mav_pose
 
 

@@ -36,9 +36,9 @@ from py_trees.common import Status
 from pydantic import Field, model_validator
 
 from marsupial.api.capabilities import Rotorcraft
+from marsupial.trees.phases import phase_event
 from marsupial.trees.skill import Condition, NodeParams, Skill, TeamMember
 
-from ..uav_docking.team import phase_event
 from .depth import DepthEstimator
 from .detection import Detection, ObjectDetector
 from .plugins import DEPTH_GROUP, DETECTOR_GROUP, build, resolve

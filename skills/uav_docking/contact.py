@@ -68,6 +68,8 @@ switch) or the camera's estimate; none reads the true gap.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from enum import Enum
 from typing import ClassVar
 
 import numpy as np
@@ -75,13 +77,14 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.api.capabilities import Rotorcraft
+from marsupial.trees.phases import Phased, Transition, go, phase_event
 from marsupial.trees.skill import Condition, NodeParams, Skill
 
 from .gust_guard import GuardLimits, GustGuard
 from .pose import invert
 from .relative_hold import PART_A_LINK, part_b_transform
 from .selection import yaw_of_rotation
-from .team import DOCKING_FLAG, PART_B_YAW, CarrierName, carrier_port, phase_event
+from .team import DOCKING_FLAG, PART_B_YAW, CarrierName, carrier_port
 from .track import CONTACT_TARGET, TRACKING, ContactTarget, TrackingState
 
 CAPTURE_TIME = 1.0  # s the magnet may take to bring Part B into contact before the capture is retried
@@ -95,7 +98,29 @@ def contact_height(z0: float, t_c: float, k_c: float = K_C) -> float:
     return z0 + k_c * math.log(max(t_c, 0.0) + 1.0)
 
 
-class Contact(Skill["Contact.Params"]):
+@dataclass(frozen=True)
+class _Closing:
+    """What one tick of the approach read (the camera's estimate of Part B in Part A's frame, the switches)."""
+
+    at: float
+    """Simulated time (s) of the tick."""
+    gap: float
+    """Estimated gap (m) from Part A's face up to Part B's, along Part A's axis."""
+    aligned: bool
+    """Part B is within ``align_tolerance`` of Part A's axis."""
+    settled: bool
+    """Part A holds still below Part B (the gap changed by less than ``SETTLED_SPEED``)."""
+    unsteady: bool
+    """The gust guard holds Part A back."""
+    abandoned: bool
+    """The gust guard turned unsteady in this tick and abandoned a capture under way (magnet off)."""
+    switch: bool
+    """The contact switch is closed (Part B seated on Part A)."""
+    standoff: float
+    """The gap (m) Part A leaves below Part B now (eq. (15) on the contact clock, held by the supervision)."""
+
+
+class Contact(Phased, Skill["Contact.Params"]):
     """After the operator's authorization, raise Part A to the UAV's Part B by eq. (15).
 
     Then magnet and levers lock it.
@@ -158,11 +183,21 @@ class Contact(Skill["Contact.Params"]):
         max_cancellations: int = Field(3, ge=0)
         """Cancellations after which the skill fails."""
 
+    class Phase(Enum):
+        """The contact's phases (module docstring); the log names them by their values."""
+
+        AUTHORIZATION_REQUESTED = "authorization_requested"
+        SETTLING = "settling"
+        APPROACH = "approach"
+        CAPTURE = "capture"
+        LOCKING = "locking"
+
     robot_kinds = (Rotorcraft,)
     sensors = ("sonar", "{carrier}/eye_in_hand")
     claims = ("{carrier}/docking",)  # the UAV and the arm are track's, which runs beside it
     reads = (f"{{carrier}}/{TRACKING}",)
     writes = (f"{{carrier}}/{CONTACT_TARGET}", f"{{carrier}}/{DOCKING_FLAG}", f"{{carrier}}/{PART_B_YAW}")
+    phase: Phase
 
     @property
     def operator_commands(self) -> tuple[str, ...]:
@@ -177,19 +212,19 @@ class Contact(Skill["Contact.Params"]):
         self.sonar = (sonar.half_angle, sonar.max_range)
         self.cancellations = 0
         self.failed_captures = 0
+        self.measured: _Closing | None = None
         self.key = f"{self.params.carrier}/{CONTACT_TARGET}"
         self.write(self.key, None)
-        self.request_authorization("contact requested")
+        self.enter(self.request_authorization("contact requested"))
 
     def step(self) -> Status:
         state: TrackingState | None = self.read(f"{self.params.carrier}/{TRACKING}")
         if self.device.locked and self.robot.docked:  # the lever end switch and the UAV's dock-lock signal
             return self.locked(state)
-        if self.phase == "authorization_requested":
-            return self.await_authorization()
-        if self.phase == "settling":
-            return self.settle(state)
-        return self.approach(state)
+        status = self.step_phase(state)
+        if status == Status.RUNNING and self.phase in (self.Phase.APPROACH, self.Phase.CAPTURE, self.Phase.LOCKING):
+            self.hold_target()
+        return status
 
     def finish(self, status: Status) -> None:
         if status != Status.SUCCESS:
@@ -200,30 +235,25 @@ class Contact(Skill["Contact.Params"]):
         self.leave_safe()
 
     # ------------------------------------------------------------- phases
-    def request_authorization(self, why: str) -> None:
+    def request_authorization(self, why: str) -> Transition:
         """Enter ``authorization_requested``: ask the operator (a ``state_change`` event), or authorize at once."""
         self.t0: float | None = None
         self.settled_since: float | None = None
         command = self.params.authorization
         if command is None:
-            self.phase = "settling"
-            phase_event(self, "authorized", by="parameter", why=why)
-            return
-        self.phase = "authorization_requested"
-        phase_event(self, "authorization_requested", command=command, why=why)
+            return go(self.Phase.SETTLING, event="authorized", by="parameter", why=why)
         self.feedback_message = f"waiting for the operator's '{command}' ({why})"
+        return go(self.Phase.AUTHORIZATION_REQUESTED, command=command, why=why)
 
-    def await_authorization(self) -> Status:
+    def _step_authorization_requested(self, state: TrackingState | None) -> Status | Transition:
         command = self.params.authorization
         channel = self.context.operator
         said = None if channel is None or command is None else channel.handle(command)
         if said is None:
             return Status.RUNNING
-        self.phase = "settling"
-        phase_event(self, "authorized", by="operator", command=command, why=said.why)
-        return Status.RUNNING
+        return go(self.Phase.SETTLING, event="authorized", by="operator", command=command, why=said.why)
 
-    def settle(self, state: TrackingState | None) -> Status:
+    def _step_settling(self, state: TrackingState | None) -> Status | Transition:
         """Wait for stable tracking under the UAV before the approach (P_R is the start of eq. 15)."""
         p = self.params
         now = self.now
@@ -239,7 +269,7 @@ class Contact(Skill["Contact.Params"]):
             self.settled_since = now
         if now - self.settled_since + 1e-9 < p.settle_time:
             return Status.RUNNING
-        self.phase, self.t0, self.s0 = "approach", now, float(state.p_B_A[2])
+        self.t0, self.s0 = now, float(state.p_B_A[2])
         self.t_c, self.last_t = 0.0, now
         self.last_axial, self.last_tick = math.inf, now
         self.guard = GustGuard(GuardLimits(p.guard_lateral, p.guard_speed, p.guard_calm_time))
@@ -250,14 +280,56 @@ class Contact(Skill["Contact.Params"]):
             self.cone = (self.sonar[0], min(self.sonar[1], echo))
         q = self.carrier.joint_positions()
         self.z0 = float(self.carrier.arm_kinematics.forward(q, PART_A_LINK)[0][2])  # z of P_R in M, eq. (15)
-        phase_event(self, "approach", gap=round(self.s0, 4), k_c=p.k_c)
-        return self.approach(state)
+        return go(self.Phase.APPROACH, at_once=True, gap=round(self.s0, 4), k_c=p.k_c)
 
-    def approach(self, state: TrackingState | None) -> Status:
-        """Eq. (15) on the standoff; at D_c (camera estimate) the magnet, on the contact switch the levers.
+    def _step_approach(self, state: TrackingState | None) -> Status | Transition:
+        """Eq. (15) on the standoff; at D_c (camera estimate) the magnet: Fig. 12b, Part A holds still at D_c and
+        the magnet forces the initial contact (at once, on a closed contact switch)."""
+        m = self.measure(state)
+        if not isinstance(m, _Closing):
+            return m
+        if m.switch or (m.gap <= self.params.D_c and m.aligned and m.settled and not m.unsteady):
+            self.device.magnet_on()
+            self.captured_at = m.at
+            return go(self.Phase.CAPTURE, at_once=True, t_c=round(self.t_c, 3), gap_estimate=round(m.gap, 4),
+                      contact_switch=m.switch)
+        return Status.RUNNING
 
-        Cancel when blind too long.
+    def _step_capture(self, state: TrackingState | None) -> Status | Transition:
+        """The magnet holds Part B; on the contact switch the levers close (Fig. 12c). Not seated after
+        ``CAPTURE_TIME``: the magnet goes off and the approach aims higher."""
+        m = self.measure(state)
+        if not isinstance(m, _Closing):
+            return m
+        if m.abandoned:  # by the gust guard (its switch is open): back to the approach, not counted as failed
+            return go(self.Phase.APPROACH, event=None)
+        if not m.switch and m.at - self.captured_at > CAPTURE_TIME:
+            self.device.magnet_off()
+            self.failed_captures += 1
+            return go(self.Phase.APPROACH, event="capture_failed", gap_estimate=round(m.gap, 4),
+                      failed=self.failed_captures)
+        if m.switch and self.device.lock():
+            return go(self.Phase.LOCKING, t_c=round(self.t_c, 3))
+        return Status.RUNNING
+
+    def _step_locking(self, state: TrackingState | None) -> Status | Transition:
+        """The levers close on Part B's ring; closed on nothing, they close again while Part B is still seated."""
+        m = self.measure(state)
+        if not isinstance(m, _Closing):
+            return m
+        if self.device.locking or self.device.locked:
+            return Status.RUNNING
+        if not m.switch:  # Part B got away from the face before the levers held it: an external force (§IV-B)
+            return self.cancel(f"capture lost: the levers closed on nothing (estimated gap {m.gap:.3f} m)")
+        return go(self.Phase.CAPTURE, event="lock_failed", at_once=True, gap_estimate=round(m.gap, 4))
+
+    def measure(self, state: TrackingState | None) -> _Closing | Status | Transition:
+        """This tick's reading of the approach (once a tick), or the cancellation when Part B is unseen too long.
+
+        It runs the contact clock t_c and the gust guard.
         """
+        if self.measured is not None and self.measured.at == self.now:
+            return self.measured
         p = self.params
         now = self.now
         p_B_A = state.p_B_A if state is not None else None
@@ -269,35 +341,24 @@ class Contact(Skill["Contact.Params"]):
             return self.cancel(reason)
         lateral = math.hypot(float(p_B_A[0]), float(p_B_A[1]))
         aligned = lateral <= p.align_tolerance
-        unsteady = self.supervise(now, gap, lateral, state)
+        unsteady, abandoned = self.supervise(now, gap, lateral, state)
         standoff = self.standoff(now, aligned, unsteady)
         settled = abs(gap - self.last_axial) <= SETTLED_SPEED * max(now - self.last_tick, 1e-9)
         self.last_axial, self.last_tick = gap, now
         switch = self.device.contact_switch
-        if self.phase == "approach" and (switch or (gap <= p.D_c and aligned and settled and not unsteady)):
-            self.device.magnet_on()  # Fig. 12b: Part A holds still at D_c, the magnet forces the initial contact
-            self.phase, self.captured_at = "capture", now
-            phase_event(self, "capture", t_c=round(self.t_c, 3), gap_estimate=round(gap, 4), contact_switch=switch)
-        elif self.phase == "capture" and not switch and now - self.captured_at > CAPTURE_TIME:  # not seated: aim higher
-            self.device.magnet_off()
-            self.phase = "approach"
-            self.failed_captures += 1
-            phase_event(self, "capture_failed", gap_estimate=round(gap, 4), failed=self.failed_captures)
-        elif self.phase == "locking" and not self.device.locking and not self.device.locked:  # closed on nothing
-            if not switch:  # Part B got away from the face before the levers held it: an external force (§IV-B)
-                return self.cancel(f"capture lost: the levers closed on nothing (estimated gap {gap:.3f} m)")
-            self.phase = "capture"  # still seated: close the levers again
-            phase_event(self, "lock_failed", gap_estimate=round(gap, 4))
-        if self.phase == "capture" and switch and self.device.lock():
-            self.phase = "locking"  # Fig. 12c: the contact switch is closed, the levers close on Part B's ring
-            phase_event(self, "locking", t_c=round(self.t_c, 3))
-        self.write(self.key, ContactTarget(standoff, self.cone))
+        self.measured = _Closing(now, gap, aligned, settled, unsteady, abandoned, switch, standoff)
+        return self.measured
+
+    def hold_target(self) -> None:
+        """Write this tick's target (the standoff and the sonar cone) for ``track``, and the eq. (15) samples."""
+        assert self.measured is not None, "the approach measured this tick"
+        p, m = self.params, self.measured
+        self.write(self.key, ContactTarget(m.standoff, self.cone))
         self.context.metric("contact_t", self.t_c, robot=self.robot_name)
         self.context.metric("contact_z_C", contact_height(self.z0, self.t_c, p.k_c), robot=self.robot_name)
         self.feedback_message = (
-            f"{self.phase}: t_c {self.t_c:.1f} s, estimated gap {gap:.3f} m (target {standoff:.3f} m)"
+            f"{self.phase.value}: t_c {self.t_c:.1f} s, estimated gap {m.gap:.3f} m (target {m.standoff:.3f} m)"
         )
-        return Status.RUNNING
 
     def standoff(self, now: float, aligned: bool, unsteady: bool) -> float:
         """The gap (m) Part A leaves below Part B now: eq. (15) on the contact clock t_c, held by the supervision.
@@ -318,27 +379,28 @@ class Contact(Skill["Contact.Params"]):
             standoff = max(standoff, p.guard_gap)
         return standoff
 
-    def supervise(self, now: float, gap: float, lateral: float, state: TrackingState) -> bool:
-        """The gust guard (:mod:`.gust_guard`): True while Part A must keep ``guard_gap`` below an unsteady UAV.
+    def supervise(self, now: float, gap: float, lateral: float, state: TrackingState) -> tuple[bool, bool]:
+        """The gust guard (:mod:`.gust_guard`): whether Part A must keep ``guard_gap`` below an unsteady UAV, and
+        whether it abandoned a capture under way whose contact switch is still open (magnet off; not counted as
+        failed, :meth:`_step_capture` goes back to the approach).
 
-        A capture under way whose contact switch is still open is abandoned (magnet off), not counted as failed;
-        once the switch closed (Part B seated on the magnet) or the levers close, the guard no longer acts.
+        Once the switch closed (Part B seated on the magnet) or the levers close, the guard no longer acts.
         """
         p = self.params
-        if p.guard_gap <= 0.0 or self.phase == "locking" or self.device.contact_switch:
-            return False
+        if p.guard_gap <= 0.0 or self.phase is self.Phase.LOCKING or self.device.contact_switch:
+            return False, False
         was = self.guard.unsteady_since is not None
         near = gap <= p.guard_gap + (GUARD_MARGIN if was else 0.0)  # farther down, a shove cannot reach Part A
         speed = float(np.linalg.norm(state.v_M))
         unsteady = self.guard.update(now, lateral if near else 0.0, speed if near else 0.0)
+        abandoned = unsteady and not was and self.phase is self.Phase.CAPTURE  # the switch is open (above)
+        if abandoned:
+            self.device.magnet_off()
         if unsteady and not was:
-            if self.phase == "capture":  # the switch is open (above): Part B is not seated
-                self.device.magnet_off()
-                self.phase = "approach"
             self.guard_event("unsteady", why=self.guard.reason, gap_estimate=round(gap, 4))
         elif was and not unsteady:
             self.guard_event("calm", gap_estimate=round(gap, 4))
-        return unsteady
+        return unsteady, abandoned
 
     def guard_event(self, guard: str, **fields: object) -> None:
         """Record a change of the gust guard: a ``state_change`` event with ``guard`` and no ``phase`` (it stays)."""
@@ -373,7 +435,7 @@ class Contact(Skill["Contact.Params"]):
         self.feedback_message = f"{self.robot.name} locked on Part A, motors off"
         return Status.SUCCESS
 
-    def cancel(self, why: str) -> Status:
+    def cancel(self, why: str) -> Status | Transition:
         """Cancel the contact: magnet off, target withdrawn (the end effector drops), authorization asked again."""
         self.device.magnet_off()
         self.write(self.key, None)
@@ -382,8 +444,7 @@ class Contact(Skill["Contact.Params"]):
         if self.cancellations > self.params.max_cancellations:
             self.feedback_message = f"contact cancelled {self.cancellations} times: {why}"
             return Status.FAILURE
-        self.request_authorization(why)
-        return Status.RUNNING
+        return self.request_authorization(why)
 
 
 class Stored(Condition["Stored.Params"]):

@@ -67,6 +67,8 @@ the floor) is within ``target_range``; then ``target_found`` is written, a
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, field
+from enum import Enum
 from typing import Annotated
 
 import numpy as np
@@ -76,6 +78,7 @@ from pydantic import Field
 from marsupial.api.capabilities import HasBase, Rotorcraft
 from marsupial.api.errors import UnknownNameError
 from marsupial.sensing import EstimateHistory, in_nav_frame, sensor_mount
+from marsupial.trees.phases import Phased, Transition, go, phase_event
 from marsupial.trees.skill import NodeParams, Skill, TeamMember
 
 from .coverage import (
@@ -91,7 +94,6 @@ from .coverage import (
     view_bearings,
     visible_cells,
 )
-from .team import phase_event
 
 D_E = 2.0  # m, D_e (§V-A): chosen — a stop per room-sized step; the front camera surveys ~4 m around each stop
 SOFT_ZONE = 1.0  # m inside the leash radius over which exploring blends into catching up with the carrier
@@ -99,7 +101,30 @@ D_TEAM = 6.0  # m, D_team (§V-A): chosen — a room's reach indoors; flying it 
 #                2700 mAh battery (≈ 6 s + 25 s at 85 W), far below the paper's 20 % bound
 
 
-class Explore(Skill["Explore.Params"]):
+@dataclass
+class _Tick:
+    """One tick of the exploration: what the phase works from, and the horizontal command it gives.
+
+    Positions in the world frame (m) as the two robots' estimates have them, the heading in rad.
+    """
+
+    xy: np.ndarray
+    """The UAV's horizontal position (m)."""
+    z: float
+    """The UAV's height (m)."""
+    yaw: float
+    """The UAV's heading (rad)."""
+    carrier_xy: np.ndarray
+    """The carrier's horizontal position (m), from its telemetry."""
+    radius: float
+    """The leash radius (m, :meth:`Explore.leash_radius`)."""
+    v_xy: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    """The phase's horizontal velocity command (m/s, world; none: hold)."""
+    yaw_rate: float = 0.0
+    """The phase's yaw rate (rad/s)."""
+
+
+class Explore(Phased, Skill["Explore.Params"]):
     """Survey the rooms around the carrier with the UAV, within D_team of the carrier.
 
     The UAV stops every D_e for a yaw sweep.
@@ -157,10 +182,20 @@ class Explore(Skill["Explore.Params"]):
         stop_at_target: bool = True
         """Succeed when the target is found (else keep exploring)."""
 
+    class Phase(Enum):
+        """The exploration's phases (module docstring)."""
+
+        CLIMB = "climb"
+        PLAN = "plan"
+        FLY = "fly"
+        SWEEP = "sweep"
+        CATCH_UP = "catch_up"
+
     robot_kinds = (Rotorcraft,)
     sensors = ("front_camera",)
     claims = ("rotors",)
     writes = ("{coverage_key}", "{target_key}")
+    phase: Phase
 
     # ------------------------------------------------------------ life cycle
     def start(self) -> None:
@@ -181,7 +216,7 @@ class Explore(Skill["Explore.Params"]):
         self.seen = np.zeros(self.map.shape, dtype=bool)
         self.found = False
         self.stops: list[np.ndarray] = []
-        self.phase = "climb"
+        self.enter(go(self.Phase.CLIMB, event=None))
         self.waypoints = np.zeros((0, 2))
         self.flown = 0.0
         self.last_xy = here
@@ -209,7 +244,7 @@ class Explore(Skill["Explore.Params"]):
             self.robot.hover()
             self.feedback_message = f"waiting for {self.params.carrier}'s telemetry"
             return Status.RUNNING
-        if self.phase == "fly":  # exploration flight only: drift while sweeping or catching up does not count
+        if self.phase is self.Phase.FLY:  # exploration flight only: drift while sweeping or catching up does not count
             self.flown += float(np.linalg.norm(xy - self.last_xy))
         self.heading_turned += abs(math.remainder(yaw - self.last_yaw, math.tau))
         self.last_xy, self.last_yaw = xy, yaw
@@ -222,9 +257,11 @@ class Explore(Skill["Explore.Params"]):
                 self.feedback_message = "target found"
                 return Status.SUCCESS
 
-        v_xy, vz, yaw_rate = self.phase_command(xy, position[2], yaw, carrier_xy, radius)
+        tick = _Tick(xy, position[2], yaw, carrier_xy, radius)
+        self.step_phase(tick)
+        v_xy, vz, yaw_rate = tick.v_xy, float(np.clip(1.0 * (p.height - position[2]), -0.5, 0.5)), tick.yaw_rate
         v_xy = self.leash(v_xy, xy, carrier_xy, radius)
-        if self.phase == "catch_up":
+        if self.phase is self.Phase.CATCH_UP:
             yaw_rate = self.face(v_xy, yaw)
         self.robot.command_velocity(v_xy[0], v_xy[1], vz, yaw_rate, frame="world")
         return Status.RUNNING
@@ -249,40 +286,50 @@ class Explore(Skill["Explore.Params"]):
         error = math.remainder(math.atan2(v_xy[1], v_xy[0]) - yaw, math.tau)
         return float(np.clip(2.0 * error, -self.params.sweep_rate, self.params.sweep_rate))
 
-    def phase_command(
-        self, xy: np.ndarray, z: float, yaw: float, carrier_xy: np.ndarray, radius: float
-    ) -> tuple[np.ndarray, float, float]:
-        """Horizontal velocity (m/s, world), climb rate (m/s) and yaw rate (rad/s) of the current phase."""
+    def _step_climb(self, tick: _Tick) -> Status | Transition:
+        """Climb to the cruise height (the climb rate is every phase's height hold)."""
+        self.feedback_message = f"climbing to {self.params.height:.1f} m"
+        if abs(self.params.height - tick.z) < 0.15:
+            return go(self.Phase.PLAN, event=None)
+        return Status.RUNNING
+
+    def _step_plan(self, tick: _Tick) -> Status | Transition:
+        """Plan the next leg when a plan is due (at once, then every 2 s while there is none); hover meanwhile."""
+        if self.now + 1e-9 >= self.replan_at or math.isinf(self.replan_at):
+            leg = self.plan(tick.xy, tick.carrier_xy, tick.radius)
+            if leg is not None:
+                return leg
+        return Status.RUNNING
+
+    def _step_fly(self, tick: _Tick) -> Status | Transition:
+        """Fly the leg, facing the way; at its end or after D_e flown, stop for a sweep."""
+        v_xy, arrived = self.follow(tick.xy)
+        if arrived or self.flown >= self.params.D_e:
+            return self.start_sweep(tick.xy)
+        tick.v_xy, tick.yaw_rate = v_xy, self.face(v_xy, tick.yaw)
+        return Status.RUNNING
+
+    def _step_sweep(self, tick: _Tick) -> Status | Transition:
+        """Hover and turn the heading through ``sweep_angle``; then plan the next leg."""
         p = self.params
-        vz = float(np.clip(1.0 * (p.height - z), -0.5, 0.5))
-        if self.phase == "climb":
-            self.feedback_message = f"climbing to {p.height:.1f} m"
-            if abs(p.height - z) < 0.15:
-                self.phase = "plan"
-            return np.zeros(2), vz, 0.0
-        if self.phase == "plan":
-            if self.now + 1e-9 >= self.replan_at or math.isinf(self.replan_at):
-                self.plan(xy, carrier_xy, radius)
-            if self.phase == "plan":
-                return np.zeros(2), vz, 0.0
-        if self.phase == "fly":
-            v_xy, arrived = self.follow(xy)
-            if arrived or self.flown >= p.D_e:
-                self.start_sweep(xy)
-                return np.zeros(2), vz, 0.0
-            return v_xy, vz, self.face(v_xy, yaw)
-        if self.phase == "catch_up":
-            return np.zeros(2), vz, 0.0  # the leash commands the catch-up flight
-        # sweep
         turned = self.heading_turned
         self.feedback_message = f"yaw sweep {math.degrees(turned):.0f}° of {math.degrees(p.sweep_angle):.0f}°"
         if turned >= p.sweep_angle:
-            self.phase, self.replan_at = "plan", math.inf
-            return np.zeros(2), vz, 0.0
-        return np.zeros(2), vz, min(p.sweep_rate, 2.0 * (p.sweep_angle - turned) + 0.05)
+            self.replan_at = math.inf
+            return go(self.Phase.PLAN, event=None)
+        tick.yaw_rate = min(p.sweep_rate, 2.0 * (p.sweep_angle - turned) + 0.05)
+        return Status.RUNNING
 
-    def plan(self, xy: np.ndarray, carrier_xy: np.ndarray, radius: float) -> None:
-        """Choose the next goal, plan the path there and cut it at D_e; or head back to the carrier."""
+    def _step_catch_up(self, tick: _Tick) -> Status | Transition:
+        """The leash commands the catch-up flight (:meth:`leash`); well inside the leash again, plan anew."""
+        if float(np.linalg.norm(tick.xy - tick.carrier_xy)) < tick.radius - SOFT_ZONE - 0.5:
+            self.replan_at = math.inf
+            return go(self.Phase.PLAN, event=None)
+        return Status.RUNNING
+
+    def plan(self, xy: np.ndarray, carrier_xy: np.ndarray, radius: float) -> Transition | None:
+        """Choose the next goal, plan the path there and cut it at D_e (the leg flown at once); or head back to the
+        carrier. ``None`` while there is nothing to fly to."""
         p = self.params
         # goals inside the leash disc now and where the carrier will be by the end of the next sweep
         horizon = p.D_e / p.speed + p.sweep_angle / p.sweep_rate
@@ -295,7 +342,7 @@ class Explore(Skill["Explore.Params"]):
         self.replan_at = self.now + 2.0
         if start is None:
             self.feedback_message = "no free cell near the UAV"
-            return
+            return None
         distance, parent = geodesic(self.map, start, passable)
         target_cells = self.target_cells(carrier_xy, radius)
         self.write_coverage(target_cells)
@@ -309,16 +356,16 @@ class Explore(Skill["Explore.Params"]):
             near = self.map.disc(carrier_xy, 1.5) & np.isfinite(distance)
             if not near.any() or self.map.disc(xy, 2.0)[self.map.index(carrier_xy)]:
                 self.feedback_message = "area surveyed: holding near the carrier"
-                return
+                return None
             goal = min(map(tuple, np.argwhere(near)), key=lambda c: distance[c])
         cells = shortcut(self.map, grid_path(self.map, parent, goal))
         points = np.vstack(
             [xy] + [self.map.point(c) for c in cells[1:]] if len(cells) > 1 else [xy, self.map.point(goal)]
         )
         self.waypoints = truncate(points, p.D_e - self.flown if self.flown < p.D_e else p.D_e)
-        self.phase = "fly"
         goal_xy, stop_xy = self.map.point(goal), self.waypoints[-1]
-        phase_event(self, "fly", goal=[round(float(v), 2) for v in goal_xy], to=[round(float(v), 2) for v in stop_xy])
+        return go(self.Phase.FLY, at_once=True, goal=[round(float(v), 2) for v in goal_xy],
+                  to=[round(float(v), 2) for v in stop_xy])
 
     def follow(self, xy: np.ndarray) -> tuple[np.ndarray, bool]:
         """Velocity along the way-points (m/s, world) braking onto the last one; whether it is reached."""
@@ -335,11 +382,12 @@ class Explore(Skill["Explore.Params"]):
         speed = min(p.speed, math.sqrt(2.0 * 1.5 * to_end), 1.5 * to_end + 0.05)
         return direction / max(norm, 1e-9) * speed, False
 
-    def start_sweep(self, xy: np.ndarray) -> None:
+    def start_sweep(self, xy: np.ndarray) -> Transition:
         """Stop here for a yaw sweep (recorded as a ``sweep`` phase with the distance flown since the last stop)."""
-        phase_event(self, "sweep", position=[round(float(v), 3) for v in xy], flown=round(self.flown, 3))
+        sweep = go(self.Phase.SWEEP, position=[round(float(v), 3) for v in xy], flown=round(self.flown, 3))
         self.stops.append(xy.copy())
-        self.phase, self.flown, self.heading_turned = "sweep", 0.0, 0.0
+        self.flown, self.heading_turned = 0.0, 0.0
+        return sweep
 
     # -------------------------------------------------------- constraints
     def leash_radius(self, z: float, carrier_z: float) -> float:
@@ -357,21 +405,21 @@ class Explore(Skill["Explore.Params"]):
 
         The catch-up velocity follows the free path to the carrier (never
         straight through a wall) at the carrier's speed + 0.5 m/s (at least
-        ``speed``). Fully blended, the phase becomes ``catch_up`` (a sweep or
-        a leg is abandoned) until the UAV is back ``SOFT_ZONE`` + 0.5 m inside.
+        ``speed``). Fully blended, the phase becomes ``catch_up`` whatever it
+        was (a sweep or a leg is abandoned; the one transition made outside
+        the phase methods, after the phase's command) until the UAV is back
+        ``SOFT_ZONE`` + 0.5 m inside (:meth:`_step_catch_up`).
         """
         d = float(np.linalg.norm(xy - carrier_xy))
         fade = float(np.clip((d - (radius - SOFT_ZONE)) / SOFT_ZONE, 0.0, 1.0))
-        if self.phase == "catch_up" and d < radius - SOFT_ZONE - 0.5:
-            self.phase, self.replan_at = "plan", math.inf
-        if fade <= 0.0 and self.phase != "catch_up":
+        catching_up = self.phase is self.Phase.CATCH_UP
+        if fade <= 0.0 and not catching_up:
             return v_xy
         v_carrier = float(np.linalg.norm(self.carrier_velocity[:2]))
         v_catch = self.path_direction(xy, carrier_xy) * max(self.params.speed, v_carrier + 0.5)
-        if fade >= 1.0 and self.phase != "catch_up":
-            phase_event(self, "catch_up", distance=round(d, 3))
-            self.phase = "catch_up"
-        if self.phase == "catch_up":
+        if fade >= 1.0 and not catching_up:
+            self.enter(go(self.Phase.CATCH_UP, distance=round(d, 3)))
+        if self.phase is self.Phase.CATCH_UP:
             self.feedback_message = f"catching up with {self.params.carrier}: {d:.1f} m away"
             return v_catch
         return (1.0 - fade) * v_xy + fade * v_catch

@@ -73,7 +73,7 @@ def unshifted(estimate: Any, shift0: tuple[float, float, float, float]) -> Any:
     ``shift0``: its ``frame_shift`` when the skill began.
 
     The UAV's vision fixes move its odometry frame O under it (position and
-    heading, :attr:`~marsupial.world.estimation.StateEstimate.frame_shift`);
+    heading, :attr:`~marsupial.api.readings.StateEstimate.frame_shift`);
     between two camera frames the drift ``C`` must see O's motion without
     those jumps, or a fix's correction of the UAV's own estimate moves P_Q^M
     by as much (a 20 cm height correction at the start of tracking sent the

@@ -28,17 +28,21 @@ and ``contact`` and is cleared on failure or preemption.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from enum import Enum
 
 import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.api.capabilities import Rotorcraft
+from marsupial.trees.phases import Phased, Transition, go, phase_event
 from marsupial.trees.skill import NodeParams, Skill
 
 from .observer import EyeInHandObserver, position_spread
 from .relative_hold import CarrierFrame, HoldGains, command_hold, relative_pose_of, target_above_part_a
-from .team import DOCKING_FLAG, UAV_POSE, CarrierName, carrier_port, phase_event
+from .relative_pose import RelativeState
+from .team import DOCKING_FLAG, UAV_POSE, CarrierName, carrier_port
 
 SEARCH_JOINTS = (0, 4)  # arm joints swept by the search: base yaw (joint 1) and wrist pitch (joint 5)
 
@@ -56,7 +60,19 @@ def search_offsets(t: float, yaw_amplitude: float, tilt_amplitude: float, period
     return np.array([yaw_amplitude * math.sin(w * t), tilt_amplitude * math.sin(2.0 * w * t)])
 
 
-class Rendezvous(Skill["Rendezvous.Params"]):
+@dataclass(frozen=True)
+class _Tick:
+    """What one tick of the encounter reads: the UAV's pose in M, its distance to the meeting point, the arm."""
+
+    state: RelativeState
+    """The UAV's pose in M (:mod:`.relative_pose`)."""
+    distance: float
+    """Distance (m) of the UAV from the meeting point (:func:`~.relative_hold.command_hold`)."""
+    arm_ready: bool
+    """The arm is at ``arm_pose`` (its encoders within ``tolerance``)."""
+
+
+class Rendezvous(Phased, Skill["Rendezvous.Params"]):
     """Fly the UAV to the meeting point over the carrier's arm while the eye-in-hand camera searches for its marker."""
 
     class Params(NodeParams):
@@ -85,10 +101,19 @@ class Rendezvous(Skill["Rendezvous.Params"]):
         tolerance: float = Field(0.02, gt=0.0)
         """Largest joint error (rad) at which the arm has reached ``arm_pose``."""
 
+    class Phase(Enum):
+        """The encounter's phases."""
+
+        MEET = "meet"
+        """The UAV flies to the meeting point, the arm to ``arm_pose``."""
+        SEARCH = "search"
+        """The camera sweeps the search pattern until the bundle is seen, then holds still on it."""
+
     robot_kinds = (Rotorcraft,)
     sensors = ("{carrier}/eye_in_hand",)
     claims = ("rotors", "{carrier}/arm")
     writes = (f"{{carrier}}/{DOCKING_FLAG}", f"{{carrier}}/{UAV_POSE}")
+    phase: Phase
 
     def start(self) -> None:
         p = self.params
@@ -98,6 +123,7 @@ class Rendezvous(Skill["Rendezvous.Params"]):
         self.gains = HoldGains(max_speed=p.approach_speed)
         self.observer = EyeInHandObserver.of(self.context, self.carrier)
         self.relative = relative_pose_of(self, self.carrier)
+        self.enter(go(self.Phase.MEET, event=None))
         self.search_started: float | None = None
         self.q_hold: np.ndarray | None = None  # arm pose held once the marker is seen
         self.seen: list[np.ndarray] = []  # UAV positions in M of the consecutive detections
@@ -118,13 +144,18 @@ class Rendezvous(Skill["Rendezvous.Params"]):
             self.feedback_message = "waiting for the UAV's estimate over the team link"
             return Status.RUNNING
         arm_ready = float(np.max(np.abs(self.carrier.joint_positions() - self.q_ready))) <= self.params.tolerance
-        if self.search_started is None:
-            self.carrier.set_joint_targets(self.q_ready)
-            self.feedback_message = f"to the meeting point: {distance:.2f} m"
-            if arm_ready:
-                self.search_started = self.now
-                phase_event(self, "search", uav_distance=distance)
+        return self.step_phase(_Tick(state, distance, arm_ready))
+
+    def _step_meet(self, tick: _Tick) -> Status | Transition:
+        self.carrier.set_joint_targets(self.q_ready)
+        self.feedback_message = f"to the meeting point: {tick.distance:.2f} m"
+        if not tick.arm_ready:
             return Status.RUNNING
+        self.search_started = self.now
+        return go(self.Phase.SEARCH, uav_distance=tick.distance)
+
+    def _step_search(self, tick: _Tick) -> Status:
+        state, distance = tick.state, tick.distance
         observation = self.observer.observe(self.now)
         if observation is not None and observation.stamp != self.last_stamp:
             self.last_stamp = observation.stamp

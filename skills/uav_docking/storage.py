@@ -26,6 +26,7 @@ node that takes the arm over in the same tick as they stop keeps it.
 
 from __future__ import annotations
 
+from enum import Enum
 from typing import Annotated
 
 import numpy as np
@@ -33,13 +34,14 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.api.capabilities import Carrier, Rotorcraft
+from marsupial.trees.phases import Phased, Transition, go, phase_event
 from marsupial.trees.skill import NodeParams, Skill, TeamMember
 
 from .pose import invert
 from .relative_hold import PART_A_LINK, CarrierFrame, HoldGains, command_hold, part_b_transform, relative_pose_of
 from .relative_pose import RelativePose, RelativeState
 from .selection import rot_z, yaw_of_rotation
-from .team import DOCKING_FLAG, PART_B_YAW, UAV_STORED, CarrierName, carrier_port, phase_event
+from .team import DOCKING_FLAG, PART_B_YAW, UAV_STORED, CarrierName, carrier_port
 
 ARM_TOLERANCE = 0.02  # rad: every joint this close to its target counts as arrived
 GRAVITY = 9.81  # m/s², standard gravity (the weight the rotor thrust must hold before the release)
@@ -87,7 +89,7 @@ class Store(Skill["Store.Params"]):
             self.robot.hold_arm()
 
 
-class Deploy(Skill["Deploy.Params"]):
+class Deploy(Phased, Skill["Deploy.Params"]):
     """Raise the stored UAV, start its motors, release it once its thrust holds its weight, climb clear of the arm."""
 
     class Params(NodeParams):
@@ -106,16 +108,26 @@ class Deploy(Skill["Deploy.Params"]):
         tolerance: float = Field(ARM_TOLERANCE, gt=0.0)
         """Largest joint error (rad) at which the arm has arrived."""
 
+    class Phase(Enum):
+        """Deployment phases (their ``state_change`` events: ``raise``, ``spin_up``, ``released``)."""
+
+        RAISE = "raise"
+        """The arm raises the locked UAV to ``arm_pose``."""
+        SPIN_UP = "spin_up"
+        """The motors run; the levers open once the thrust holds the UAV's weight."""
+        CLIMB = "climb"
+        """Released: the UAV climbs ``clearance`` above the release point, moving with the carrier."""
+
     robot_kinds = (Rotorcraft,)
     sensors = ("{carrier}/eye_in_hand",)
     claims = ("rotors", "{carrier}/arm", "{carrier}/docking")
     reads = (f"{{carrier}}/{PART_B_YAW}",)
     writes = (f"{{carrier}}/{DOCKING_FLAG}", f"{{carrier}}/{UAV_STORED}", f"{{carrier}}/{PART_B_YAW}")
+    phase: Phase
 
     def start(self) -> None:
         self.carrier = carrier_port(self, self.params.carrier)
         self.q_raised = self.carrier.arm_pose(self.params.arm_pose)
-        self.phase = "raise"
         self.spin_up_deadline = 0.0
         self.p_clear_M = np.zeros(3)
         self.yaw_clear_M = 0.0
@@ -123,43 +135,44 @@ class Deploy(Skill["Deploy.Params"]):
         self.T_Q_B = part_b_transform(self.robot)
         self.relative: RelativePose | None = None  # from the hand-over on
         self.write(f"{self.params.carrier}/{DOCKING_FLAG}", True)
-        phase_event(self, "raise")
+        self.enter(go(self.Phase.RAISE))
 
     def step(self) -> Status:
         uav = self.robot
-        if self.phase != "climb" and not (self.carrier.docking.locked and uav.docked):
+        if self.phase is not self.Phase.CLIMB and not (self.carrier.docking.locked and uav.docked):
             self.feedback_message = f"{self.robot_name} is not locked on {self.params.carrier}'s Part A"
             return Status.FAILURE
-        if self.phase == "raise":
-            self.carrier.set_joint_targets(self.q_raised)
-            error = float(np.max(np.abs(self.carrier.joint_positions() - self.q_raised)))
-            self.feedback_message = f"raising the arm: {error:.3f} rad to go"
-            if error <= self.params.tolerance:
-                self.robot.set_motors(True)
-                self.phase, self.spin_up_deadline = "spin_up", self.now + self.params.spin_up_timeout
-                phase_event(self, "spin_up")
+        return self.step_phase()
+
+    def _step_raise(self) -> Status | Transition:
+        self.carrier.set_joint_targets(self.q_raised)
+        error = float(np.max(np.abs(self.carrier.joint_positions() - self.q_raised)))
+        self.feedback_message = f"raising the arm: {error:.3f} rad to go"
+        if error > self.params.tolerance:
             return Status.RUNNING
-        if self.phase == "spin_up":
-            self.carrier.set_joint_targets(self.q_raised)
-            weight = uav.mass * GRAVITY
-            self.feedback_message = f"motors spinning up: thrust {uav.thrust:.2f} N of {weight:.2f} N"
-            if uav.thrust >= weight:
-                T_M_Q = self.T_M_Q_release = self.hand_over()
-                self.p_clear_M = T_M_Q[:3, 3] + np.array([0.0, 0.0, self.params.clearance])
-                self.yaw_clear_M = yaw_of_rotation(T_M_Q[:3, :3])
-                # the estimates after the hand-over
-                self.relative = relative_pose_of(self, self.carrier, since=self.now)
-                self.carrier.docking.release()
-                self.write(f"{self.params.carrier}/{UAV_STORED}", False)
-                self.write(f"{self.params.carrier}/{PART_B_YAW}", None)  # released: no UAV on Part A
-                self.phase = "climb"
-                phase_event(self, "released", thrust=uav.thrust, weight=weight)
-                return self.climb()
-            if self.now >= self.spin_up_deadline:
-                self.feedback_message = f"thrust {uav.thrust:.2f} N never reached the weight {weight:.2f} N"
-                return Status.FAILURE
-            return Status.RUNNING
-        return self.climb()
+        self.robot.set_motors(True)
+        self.spin_up_deadline = self.now + self.params.spin_up_timeout
+        return go(self.Phase.SPIN_UP)
+
+    def _step_spin_up(self) -> Status | Transition:
+        uav = self.robot
+        self.carrier.set_joint_targets(self.q_raised)
+        weight = uav.mass * GRAVITY
+        self.feedback_message = f"motors spinning up: thrust {uav.thrust:.2f} N of {weight:.2f} N"
+        if uav.thrust >= weight:
+            T_M_Q = self.T_M_Q_release = self.hand_over()
+            self.p_clear_M = T_M_Q[:3, 3] + np.array([0.0, 0.0, self.params.clearance])
+            self.yaw_clear_M = yaw_of_rotation(T_M_Q[:3, :3])
+            # the estimates after the hand-over
+            self.relative = relative_pose_of(self, self.carrier, since=self.now)
+            self.carrier.docking.release()
+            self.write(f"{self.params.carrier}/{UAV_STORED}", False)
+            self.write(f"{self.params.carrier}/{PART_B_YAW}", None)  # released: no UAV on Part A
+            return go(self.Phase.CLIMB, event="released", at_once=True, thrust=uav.thrust, weight=weight)
+        if self.now >= self.spin_up_deadline:
+            self.feedback_message = f"thrust {uav.thrust:.2f} N never reached the weight {weight:.2f} N"
+            return Status.FAILURE
+        return Status.RUNNING
 
     def hand_over(self) -> np.ndarray:
         """Reset the UAV's estimator to its pose at release, as the carrier knows it; returns that pose in M (4×4).
@@ -179,9 +192,9 @@ class Deploy(Skill["Deploy.Params"]):
         self.robot.reset_estimate(p_N, yaw_N)
         return T_M_Q
 
-    def climb(self) -> Status:
+    def _step_climb(self) -> Status:
         """Climb to the clearance height above the release point, moving with the carrier (on the estimates)."""
-        assert self.relative is not None, "climb() follows the hand-over"
+        assert self.relative is not None, "the climb follows the hand-over"
         state = self.relative.update(self.now)
         if state.T_M_Q is None:  # no telemetry since the hand-over yet: the UAV is where it was released
             state = RelativeState(self.now, self.T_M_Q_release)
@@ -204,7 +217,7 @@ class Deploy(Skill["Deploy.Params"]):
                 self.carrier.set_joint_targets(self.params.then_arm)
             self.leave_safe()
             return
-        if self.phase != "climb":
+        if self.phase is not self.Phase.CLIMB:
             self.robot.set_motors(False)  # still locked: stop the rotors again
         self.carrier.hold_arm()
         self.leave_safe()

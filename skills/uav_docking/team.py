@@ -1,4 +1,4 @@
-"""What the UAV skills of the docking family share: the carrier they work with, their blackboard keys, phase events.
+"""What the UAV skills of the docking family share: the carrier they work with, their blackboard keys.
 
 A UAV skill (``explore``, ``rendezvous``, ``relative_hold``, ``deploy``)
 runs on the UAV (``robot:``) and names its carrier, a team member of class
@@ -58,9 +58,3 @@ def carrier_port(skill: MissionNode[Any], name: str) -> CarrierView:
         raise UnknownNameError(f"carrier of {skill.name} (a mobile_manipulator)", name, carriers)
     return skill.member(name)
 
-
-def phase_event(skill: MissionNode[Any], phase: str, **fields: Any) -> None:
-    """Record that ``skill`` entered ``phase`` (a ``state_change`` event with the node, skill, robot and ``fields``)."""
-    skill.context.event(
-        "state_change", node=skill.name, skill=skill.kind, robot=skill.robot_name, phase=phase, **fields
-    )

@@ -61,6 +61,7 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.api.capabilities import Rotorcraft
+from marsupial.trees.phases import phase_event
 from marsupial.trees.skill import NodeParams, Skill
 
 from .engine import MotionEngine, MotionEngineParams
@@ -68,7 +69,7 @@ from .pose import invert
 from .relative_hold import PART_A_LINK, CarrierFrame, HoldGains, command_hold, part_b_offset, relative_pose_of
 from .relative_pose import RelativeState
 from .selection import PbvsTarget, SelectionParams, rot_z, yaw_of_rotation
-from .team import DOCKING_FLAG, CarrierName, carrier_port, phase_event
+from .team import DOCKING_FLAG, CarrierName, carrier_port
 from .vicinity import VicinityParams
 from .zones import ZoneMap, carrier_zones
 
