@@ -45,16 +45,16 @@ class LiveState(RobotState):
         self.model = gateway.model()
         self.kinematics = None
 
-    @property  # type: ignore[override]
-    def readings(self) -> RobotReadings:
+    @property
+    def readings(self) -> RobotReadings:  # type: ignore[override]
         return self._gateway.readings(self._gateway.robot.world.now)
 
-    @property  # type: ignore[override]
-    def held(self) -> Any:
+    @property
+    def held(self) -> Any:  # type: ignore[override]
         return _Sensors(self._gateway, queued=False)
 
-    @property  # type: ignore[override]
-    def queues(self) -> Any:
+    @property
+    def queues(self) -> Any:  # type: ignore[override]
         return _Sensors(self._gateway, queued=True)
 
 
