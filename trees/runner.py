@@ -43,31 +43,34 @@ from typing import Any
 import py_trees
 from py_trees.common import Status
 from rich.console import Console
-from rich.live import Live
-from rich.table import Table
-from rich.text import Text
 
 from marsupial.world import World
 from marsupial.world.disturbances import apply_disturbances
 from marsupial.world.errors import UnknownNameError, WorldError
 from marsupial.world.kidnap import spread_pose
-from marsupial.world.scoring import Referee
+from marsupial.world.scoring import SCORES, Referee
 from marsupial.world.team_link import TeamLinkConfig
 
 from .arbitration import Arbiter
 from .compiler import CompiledTree, compile_mission
 from .errors import MissionError, check_seed, one_of, suggest
+from .metrics import MetricSpec, declare
 from .mission import Mission, load_mission
 from .operator import CONTROL_COMMANDS, OperatorChannel, OperatorCommand
+from .progress import ProgressLine, RobotStatus
 from .recorder import Recorder, Terminated
 from .sinks import Sink
 from .skill import RunContext
+from .summary import read_story, summary_table
 
 #: outcome -> process exit code
 EXIT_CODES = {"success": 0, "interrupted": 130, "terminated": 143}
 METRIC_PERIOD = 1.0  # s of simulated time between battery samples
 POSE_PERIOD = 0.2  # s of simulated time between recorded robot poses (5 Hz keeps the log's cost low)
 RUNS_DIR = Path("runs")  # where runs log by default, relative to the current folder
+#: the metrics recorded by the runner (batteries) and by the referee it attaches (marsupial.world.scoring)
+declare(MetricSpec("battery_soc", "fraction", "battery state of charge"), owner=__name__)
+declare(*(MetricSpec(**score) for score in SCORES), owner="marsupial.world.scoring:Referee")
 
 
 @dataclass
@@ -213,58 +216,10 @@ def battery_of(robot: Any) -> float | None:
     return None if battery is None else float(battery.soc)
 
 
-class _Progress:
-    """The live progress line (sim time, RTF, active skill and battery per robot); off when not a TTY."""
-
-    def __init__(self, console: Console, enabled: bool):
-        self.console = console
-        self.live: Live | None = None
-        if enabled and console.is_terminal:
-            self.live = Live(Text(""), console=console, refresh_per_second=8, transient=True)
-            self.live.start()
-        self._last = 0.0
-
-    def update(self, world: World, tree: CompiledTree, wall: float, paused: bool) -> None:
-        if self.live is None or time.perf_counter() - self._last < 0.1:
-            return
-        self._last = time.perf_counter()
-        active = tree.active_skills()
-        parts = [f"t {world.now:7.1f} s", f"RTF {world.now / wall if wall > 0 else 0:5.1f}x"]
-        if paused:
-            parts.append("PAUSED")
-        for name, robot in world.robots.items():
-            skills = ", ".join(s.name for s in active.get(name, ())) or "idle"
-            soc = battery_of(robot)
-            parts.append(f"{name}: {skills}" + (f" {soc:.0%}" if soc is not None else ""))
-        self.live.update(Text(" | ".join(parts)))
-
-    def stop(self) -> None:
-        if self.live is not None:
-            self.live.stop()
-
-
-def summary_table(result: RunResult) -> Table:
-    """The end-of-run summary: outcome, times, speed, log, robots and metrics."""
-    table = Table(title=f"mission {result.mission}", show_header=False, title_justify="left")
-    table.add_column("", style="bold")
-    table.add_column("")
-    style = "green" if result.outcome == "success" else "red"
-    table.add_row("outcome", Text(result.outcome, style=style))
-    table.add_row("seed", str(result.seed))
-    table.add_row("sim time", f"{result.sim_time:.2f} s ({result.ticks} ticks)")
-    table.add_row("wall time", f"{result.wall_time:.2f} s (RTF {result.real_time_factor:.1f}x)")
-    if result.log_path is not None:
-        table.add_row("log", Text(str(result.log_path)))
-    for name, state in result.robots.items():
-        text = "position [" + ", ".join(f"{v:.2f}" for v in state["position"]) + "] m"
-        if state.get("battery") is not None:
-            text += f", battery {state['battery']:.1%}"
-        table.add_row(Text(name), Text(text))
-    for name, value in sorted(result.metrics.items()):
-        table.add_row(Text(name), f"{value:.4g}")
-    if result.message:
-        table.add_row("error", Text(result.message.strip().splitlines()[-1], style="red"))
-    return table
+def robot_statuses(world: World, tree: CompiledTree) -> list[RobotStatus]:
+    """Each robot's running skills and battery, for the progress line."""
+    active = tree.active_skills()
+    return [RobotStatus(n, tuple(s.name for s in active.get(n, ())), battery_of(r)) for n, r in world.robots.items()]
 
 
 # ------------------------------------------------------------------ running
@@ -354,7 +309,7 @@ def run_mission(
     recorder = _open_recorder(mission, seed, until, log, sinks, record_images, world)
     context.recorder = recorder
     world.add_actor(Referee(world, context))  # truth-based scores, world side: skills never read them
-    display = _Progress(console, progress)
+    display = ProgressLine(console, progress)
     outcome, message, ticks = "failure", "", _TickCount()
     started = time.perf_counter()
     try:
@@ -385,7 +340,7 @@ def run_mission(
     )
     world.close()
     if progress:
-        console.print(summary_table(result))
+        console.print(summary_table(result, until, read_story(log)))
     return result
 
 
@@ -443,7 +398,7 @@ def _loop(
     context: RunContext,
     until: float | None,
     pace: float | None,
-    display: _Progress,
+    display: ProgressLine,
     started: float,
     ticks: _TickCount,
 ) -> str:
@@ -476,7 +431,8 @@ def _loop(
             return "time_limit"
         world.step(period)
         wall = _hold_pace(world, pace, started)
-        display.update(world, tree, wall, paused)
+        if display.due():
+            display.show(world.now, until, wall, paused, robot_statuses(world, tree))
 
 
 def _log_poses(recorder: Any, world: World, now: float, due: float) -> float:

@@ -50,6 +50,7 @@ from pydantic import BaseModel, ConfigDict, model_validator
 from marsupial.world.errors import UnknownNameError
 
 from .arbitration import ANY_RESOURCE, Arbiter, Claimant, CommandPort, Stamp
+from .metrics import MetricSpec
 
 if TYPE_CHECKING:
     import numpy as np
@@ -261,6 +262,8 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P]):
     uses_robot: ClassVar[bool] = True
     #: a condition's parameter set by the compact guard form (``Condition.primary``); ``None`` for skills
     primary: ClassVar[str | None] = None
+    #: the metrics it records (:mod:`marsupial.trees.metrics`), registered when the registry resolves it
+    metrics: ClassVar[tuple[MetricSpec, ...]] = ()
 
     @property
     def operator_commands(self) -> tuple[str, ...]:

@@ -35,6 +35,8 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.trees.milestones import milestone
+
 from ..uav_docking.team import phase_event
 from .insert import INSERTION, ArmSkill, ArmSkillParams, Insertion
 from .insertion import HOLSTERS, T_HANDLE_TCP, cartesian_path, held_mav_pose, line_poses
@@ -103,6 +105,7 @@ class LaunchScout(ArmSkill):
         position, _ = held_mav_pose(self.robot)
         self.released_at = position
         phase_event(self, "launched", scout=self.params.scout, position=[round(float(x), 3) for x in position])
+        milestone(self, "launched", robot=self.params.scout, detail=f"through the aperture by {self.robot_name}")
         self.stage, self.since = "clear", self.now
         return Status.RUNNING
 

@@ -74,6 +74,8 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.trees.metrics import MetricSpec
+from marsupial.trees.milestones import milestone
 from marsupial.trees.skill import Condition, NodeParams, Skill
 from marsupial.world.capabilities import Rotorcraft
 
@@ -100,6 +102,13 @@ class Contact(Skill["Contact.Params"]):
 
     Then magnet and levers lock it.
     """
+
+    metrics: ClassVar[tuple[MetricSpec, ...]] = (
+        MetricSpec("contact_t", "s", "contact clock t_c of eq. (15) during the approach"),
+        MetricSpec("contact_z_C", "m", "height z_C of Part A in M during the approach, eq. (15)"),
+        MetricSpec("contact_time", "s", "time from the start of the approach to the lock", "each"),
+        MetricSpec("docking_time", "s", "time from the start of tracking to the lock on Part A", "each"),
+    )
 
     class Params(NodeParams):
         carrier: CarrierName = "carrier"
@@ -369,6 +378,8 @@ class Contact(Skill["Contact.Params"]):
             self.write(f"{self.params.carrier}/{PART_B_YAW}", yaw)
             fields["part_b_yaw"] = round(yaw, 3)
         phase_event(self, "locked", **fields)
+        took = f"tracking → lock {fields['docking_time']:.1f} s" if "docking_time" in fields else ""
+        milestone(self, "docked", detail=f"on {self.params.carrier}" + (f", {took}" if took else ""))
         self.feedback_message = f"{self.robot.name} locked on Part A, motors off"
         return Status.SUCCESS
 

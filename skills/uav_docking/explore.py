@@ -67,13 +67,15 @@ the floor) is within ``target_range``; then ``target_found`` is written, a
 from __future__ import annotations
 
 import math
-from typing import Annotated
+from typing import Annotated, ClassVar
 
 import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.sensing import EstimateHistory, in_nav_frame, sensor_mount
+from marsupial.trees.metrics import MetricSpec
+from marsupial.trees.milestones import milestone
 from marsupial.trees.skill import NodeParams, Skill, TeamMember
 from marsupial.world.capabilities import HasBase, Rotorcraft
 from marsupial.world.errors import UnknownNameError
@@ -104,6 +106,11 @@ class Explore(Skill["Explore.Params"]):
 
     The UAV stops every D_e for a yaw sweep.
     """
+
+    metrics: ClassVar[tuple[MetricSpec, ...]] = (
+        MetricSpec("coverage", "fraction", "share of the plan's target cells the UAV's camera has seen"),
+        MetricSpec("target_found", "flag", "the UAV's camera found the target", "count"),
+    )
 
     class Params(NodeParams):
         carrier: Annotated[str, TeamMember(HasBase)] = "carrier"
@@ -448,3 +455,4 @@ class Explore(Skill["Explore.Params"]):
             pixels=blob.area,
         )
         self.context.metric("target_found", 1.0, robot=self.robot_name)
+        milestone(self, f"found {p.target}", detail=f"at ({point[0]:.1f}, {point[1]:.1f}) m")

@@ -32,6 +32,7 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.trees.milestones import milestone
 from marsupial.trees.skill import NodeParams, Skill, TeamMember
 from marsupial.world.capabilities import Carrier, Rotorcraft
 
@@ -79,6 +80,7 @@ class Store(Skill["Store.Params"]):
         self.write(f"{self.robot_name}/{UAV_STORED}", True)
         self.write(f"{self.robot_name}/{DOCKING_FLAG}", False)
         phase_event(self, "stored", uav=uav, charging=device.charging)
+        milestone(self, "stored", robot=uav, detail=f"on {self.robot_name}" + (", charging" if device.charging else ""))
         self.feedback_message = f"{uav} stored, charging: {device.charging}"
         return Status.SUCCESS
 
@@ -194,6 +196,7 @@ class Deploy(Skill["Deploy.Params"]):
         if error > 0.05:
             return Status.RUNNING
         phase_event(self, "clear", height_above_release=self.params.clearance)
+        milestone(self, "deployed", detail=f"from {self.params.carrier}")
         return Status.SUCCESS
 
     def finish(self, status: Status) -> None:

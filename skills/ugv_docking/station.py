@@ -10,6 +10,8 @@
   backwards a given distance on its odometry (the station's entrance is its only opening).
 
 Each reports the platform over the team link (:class:`~.vision.PlatformReport`).
+``lift`` writes the names of the children it lifted to ``{robot}/lifted``
+(``carry`` reads them for its milestone, ``release`` clears them).
 Heights and distances in m, speeds m/s.
 """
 
@@ -19,6 +21,7 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.trees.milestones import milestone
 from marsupial.trees.skill import NodeParams, Skill
 from marsupial.world.capabilities import HasBase, HasLift
 
@@ -27,6 +30,7 @@ from .mother import ChildMember
 from .vision import report_platform
 
 LIFT_TOLERANCE = 0.005  # m: the lift encoder this close to its target counts as arrived
+LIFTED = "{robot}/lifted"  # blackboard: the children the platform lifted (team member names)
 
 
 class Lift(Skill["Lift.Params"]):
@@ -38,6 +42,7 @@ class Lift(Skill["Lift.Params"]):
 
     robot_kinds = (HasLift,)
     claims = ("lift",)
+    writes = (LIFTED,)
 
     def start(self) -> None:
         self.lifted = self.robot.raise_platform()
@@ -49,13 +54,19 @@ class Lift(Skill["Lift.Params"]):
             return Status.FAILURE
         height, travel = float(self.robot.platform_height()), float(self.robot.lift_travel)
         self.feedback_message = f"lifting {', '.join(self.lifted)}: {height:.3f} of {travel:.2f} m"
-        return Status.SUCCESS if height >= travel - self.params.tolerance else Status.RUNNING
+        if height < travel - self.params.tolerance:
+            return Status.RUNNING
+        self.write(LIFTED.format(robot=self.robot_name), list(self.lifted))
+        for child in self.lifted:
+            milestone(self, "lifted", robot=child, detail=f"into {self.robot_name}'s capsule")
+        return Status.SUCCESS
 
 
 class Carry(DriveTo):
     """Drive the mother to a point with the child stored in its capsule (``drive_to`` on the mother's estimate)."""
 
     robot_kinds = (HasBase, HasLift)
+    reads = (LIFTED,)
 
     def start(self) -> None:
         travel = float(self.robot.lift_travel)
@@ -65,7 +76,12 @@ class Carry(DriveTo):
         if not self.stored:
             self.feedback_message = "no child stored: the platform is not up with a child on it"
             return Status.FAILURE
-        return super().step()
+        status = super().step()
+        if status == Status.SUCCESS:
+            where = f"to ({self.params.target[0]:.2f}, {self.params.target[1]:.2f}) m"
+            for child in self.read(LIFTED.format(robot=self.robot_name), ()):
+                milestone(self, "carried", robot=child, detail=f"by {self.robot_name} {where}")
+        return status
 
 
 class Release(Skill["Release.Params"]):
@@ -83,6 +99,7 @@ class Release(Skill["Release.Params"]):
 
     robot_kinds = (HasLift,)
     claims = ("lift", "{child}/base")
+    writes = (LIFTED,)
 
     def start(self) -> None:
         self.robot.lower_platform()
@@ -102,6 +119,8 @@ class Release(Skill["Release.Params"]):
         if backed >= p.distance:
             self.child.stop()
             self.feedback_message = f"{p.child} out, {backed:.2f} m back"
+            self.write(LIFTED.format(robot=self.robot_name), [])
+            milestone(self, "released", robot=p.child, detail=f"backed out of {self.robot_name}'s station")
             return Status.SUCCESS
         self.child.drive(-p.speed, 0.0)
         self.feedback_message = f"{p.child} backing out: {backed:.2f} m"

@@ -7,6 +7,7 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.skills.generic import Hover
+from marsupial.trees.metrics import MetricSpec
 from marsupial.trees.skill import NodeParams
 
 
@@ -23,6 +24,7 @@ class MeteredHover(Hover):
         """Drift (m) from the start point beyond which the skill fails."""
 
     writes = ("{robot}/hover_drift",)
+    metrics = (MetricSpec("hover_drift", "m", "horizontal drift from where the hover began (estimate)", "max"),)
 
     def start(self) -> None:
         super().start()
