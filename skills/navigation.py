@@ -469,7 +469,7 @@ class Navigate(Skill["Navigate.Params"]):
         if to_end <= p.goal_tolerance and s >= self.follower.length - p.goal_tolerance - 0.5:
             self.robot.stop()
             self.feedback_message = f"path end reached ({to_end:.2f} m)"
-            milestone(self, "reached its path's end", detail=self.name if self.name != self.kind else "")
+            milestone(self, f"reached the end of '{self.name}'" if self.name != self.kind else "reached its path's end")
             return Status.SUCCESS
         if s > self.last_progress + 0.1:
             self.last_progress, self.last_progress_time = s, self.now

@@ -143,7 +143,7 @@ async def visit(url: str, subprotocol: str) -> str:
 
 
 async def visits_then_stay(url: str) -> tuple[list[str], list[dict], int | None]:
-    """Five visits, three legacy ones, then one client until the end: (visit results, its status messages, close code)."""
+    """Five visits, three legacy ones, then a client until the end: (visit results, its status messages, close code)."""
     results = [await visit(url, SUBPROTOCOL) for _ in range(5)]
     results += [await visit(url, "foxglove.websocket.v1") for _ in range(3)]
     statuses = []
