@@ -3,8 +3,9 @@
 Reads ``summary.json`` and ``trials.json``; shows the success rate with its
 Wilson 95 % interval (overall and per ``--vary`` combination), the outcome
 breakdown, histograms of simulated times and of each metric's last value over
-the trials (titled with its meaning and unit from the metric registry), and a table of trials linking to each kept log's run report
-(written to ``reports/`` next to the campaign page).
+the trials (titled with its meaning and unit from the metric registry), and a
+table of trials linking to each kept log's run report (written to
+``reports/`` next to the campaign page).
 """
 
 from __future__ import annotations
