@@ -23,6 +23,8 @@ from truth_trap import truth_trap
 import marsupial.missions
 import marsupial.skills
 import marsupial.trees
+from marsupial.trees import metrics
+from marsupial.trees.replay import read_log
 from marsupial.trees.runner import run_mission
 
 SKILLS_DIR = Path(marsupial.skills.__file__).resolve().parent
@@ -121,12 +123,16 @@ SHIPPED = sorted(p.stem for p in MISSIONS_DIR.glob("*.yaml"))
 
 
 @pytest.mark.parametrize("mission", SHIPPED)
-def test_shipped_mission_decides_without_truth(mission: str) -> None:
+def test_shipped_mission_decides_without_truth(mission: str, tmp_path: Path) -> None:
+    """No truth read from decision code; and (the same run's log) every metric it records is declared."""
     py_trees.blackboard.Blackboard.clear()
+    log = tmp_path / f"{mission}.mcap"
     with truth_trap() as trap:
-        result = run_mission(mission, until=TRAP_RUN_S.get(mission, DEFAULT_TRAP_RUN_S), progress=False)
+        result = run_mission(mission, until=TRAP_RUN_S.get(mission, DEFAULT_TRAP_RUN_S), progress=False, log_path=log)
     assert result.outcome in ("success", "time_limit"), result.message
     assert trap.violations == [], trap.violations[0]
+    recorded = read_log(log).metrics
+    assert recorded and metrics.undeclared(m["name"] for m in recorded) == []  # marsupial.trees.metrics
 
 
 def test_the_trap_catches_a_truth_read_from_a_skill() -> None:

@@ -57,6 +57,7 @@ __all__ = [
     "reduce",
     "spec",
     "summarize",
+    "undeclared",
 ]
 
 Aggregation = Literal["last", "max", "min", "mean_abs", "total", "each", "count"]
@@ -135,6 +136,11 @@ def spec(name: str) -> MetricSpec | None:
         _load_all()
         found = declared(name)
     return found
+
+
+def undeclared(names: Iterable[str]) -> list[str]:
+    """The metric names among ``names`` (plain or ``name[labels]``) that nobody declares, sorted, once each."""
+    return sorted({base_name(name) for name in names if spec(name) is None})
 
 
 def catalogue(shipped_only: bool = False) -> dict[str, MetricSpec]:
@@ -256,6 +262,6 @@ def markdown_table(specs: Mapping[str, MetricSpec] | None = None) -> str:
     specs = catalogue(shipped_only=True) if specs is None else specs
     lines = ["| metric | unit | aggregation | meaning | recorded by |", "|---|---|---|---|---|"]
     for name, item in specs.items():
-        by = ", ".join(f"`{o.rpartition(':')[2] or o}`" for o in owners(name)) or "—"
+        by = ", ".join(sorted(f"`{o.rpartition(':')[2] if ':' in o else o.rpartition('.')[2]}`" for o in owners(name)))
         lines.append(f"| `{name}` | {item.unit} | {item.aggregation} | {item.meaning} | {by} |")
     return "\n".join(lines) + "\n"
