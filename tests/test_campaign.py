@@ -86,3 +86,16 @@ def test_local_and_ray_backends_give_the_same_outcomes(mission, tmp_path):
 def test_ray_needs_a_short_output_path(mission, tmp_path):
     with pytest.raises(MissionError, match="socket paths"):
         run_campaign(mission, 1, tmp_path / ("x" * 60), backend="ray")
+
+
+def test_campaign_command_ends_with_the_report_command(mission, tmp_path):
+    from click.testing import CliRunner
+
+    from marsupial.trees.cli import cli
+
+    out = tmp_path / "my campaign"
+    result = CliRunner().invoke(cli, ["campaign", mission, "--trials", "1", "--workers", "1", "--out", str(out),
+                                      "--until", "2"], env={"COLUMNS": "200"})
+    assert result.exit_code == 0, result.output
+    assert result.output.splitlines()[-1] == f"report: marsupial report '{out}'"
+    assert (out / "summary.json").is_file()

@@ -78,8 +78,25 @@ def _compiled(mission_ref: str, sets: tuple[str, ...]) -> Any:
     return compile_mission(load_mission(mission_ref, _assignments(sets, "--set")))
 
 
-#: a seed: any non-negative integer (numpy's seed sequences take no negative numbers)
-SEED = click.IntRange(min=0)
+class _Seed(click.ParamType):
+    """A world seed: an integer ≥ 0 (numpy's seed sequences take no negative numbers)."""
+
+    name = "seed"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> int:
+        """``value`` as a seed; a usage error (exit 2) saying what a seed is otherwise."""
+        if isinstance(value, int) and not isinstance(value, bool) and value >= 0:
+            return value
+        try:
+            number = int(str(value).strip(), 10)
+        except ValueError:
+            self.fail(f"{value!r} is not a seed; expected an integer ≥ 0", param, ctx)
+        if number < 0:
+            self.fail(f"{number} is not a seed; expected an integer ≥ 0", param, ctx)
+        return number
+
+
+SEED = _Seed()
 
 
 def _positive_time(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
@@ -468,7 +485,10 @@ def campaign(
     until: float | None,
     logs: str,
 ) -> None:
-    """Run independent seeded trials of MISSION in parallel; write trials.json/.csv and summary.json in --out."""
+    """Run independent seeded trials of MISSION in parallel; write trials.json/.csv and summary.json in --out.
+
+    Ends by printing the `marsupial report` command that turns the folder into an HTML page.
+    """
     from .campaign import run_campaign
 
     try:
@@ -504,6 +524,7 @@ def campaign(
             ", ".join(f"{k} {n}" for k, n in group["outcomes"].items()),
         )
     Console().print(table)
+    click.echo(f"report: marsupial report {shlex.quote(out)}")
 
 
 def main(argv: list[str] | None = None) -> None:
