@@ -74,7 +74,10 @@ def _report_collision(kind: str, name: str, builtin: Provider, others: Sequence[
 
 @cache
 def installed(kind: str) -> dict[str, tuple[Provider, ...]]:
-    """Installed providers of skills (``kind="skill"``) or conditions, by name (cached per process)."""
+    """Installed providers of skills (``kind="skill"``) or conditions, by name (cached per process).
+
+    A name's providers are in a fixed order: marsupial's first, then by distribution name.
+    """
     group = GROUPS[kind][0]
     found: dict[str, list[Provider]] = {}
     for ep in entry_points(group=group):
@@ -83,7 +86,12 @@ def installed(kind: str) -> dict[str, tuple[Provider, ...]]:
         providers = found.setdefault(ep.name, [])
         if provider not in providers:  # one distribution seen twice on sys.path
             providers.append(provider)
-    return {name: tuple(p) for name, p in sorted(found.items())}
+    return {name: tuple(sorted(p, key=_provider_order)) for name, p in sorted(found.items())}
+
+
+def _provider_order(provider: Provider) -> tuple[bool, str, str]:
+    """Sort key of a name's providers: marsupial's first, then by distribution and target."""
+    return provider.distribution != BUILTIN, provider.distribution, provider.target
 
 
 def import_target(target: str) -> type:
