@@ -78,25 +78,17 @@ def _compiled(mission_ref: str, sets: tuple[str, ...]) -> Any:
     return compile_mission(load_mission(mission_ref, _assignments(sets, "--set")))
 
 
-class _Seed(click.ParamType):
-    """A world seed: an integer ≥ 0 (numpy's seed sequences take no negative numbers)."""
-
-    name = "seed"
-
-    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> int:
-        """``value`` as a seed; a usage error (exit 2) saying what a seed is otherwise."""
-        if isinstance(value, int) and not isinstance(value, bool) and value >= 0:
-            return value
-        try:
-            number = int(str(value).strip(), 10)
-        except ValueError:
-            self.fail(f"{value!r} is not a seed; expected an integer ≥ 0", param, ctx)
-        if number < 0:
-            self.fail(f"{number} is not a seed; expected an integer ≥ 0", param, ctx)
-        return number
-
-
-SEED = _Seed()
+def _seed(ctx: click.Context, param: click.Parameter, value: str | int | None) -> int | None:
+    """Check a seed option: an integer ≥ 0 (numpy's seed sequences take no negative numbers); exit 2 otherwise."""
+    if value is None or (isinstance(value, int) and not isinstance(value, bool) and value >= 0):
+        return value
+    try:
+        number = int(str(value).strip(), 10)
+    except ValueError:
+        raise click.BadParameter(f"{value!r} is not a seed; expected an integer ≥ 0") from None
+    if number < 0:
+        raise click.BadParameter(f"{number} is not a seed; expected an integer ≥ 0")
+    return number
 
 
 def _positive_time(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
@@ -137,7 +129,9 @@ def _show_warning(message: Warning | str, category: type[Warning], filename: str
 
 @cli.command()
 @click.argument("mission", required=False, default=DEFAULT_MISSION)
-@click.option("--seed", type=SEED, help="World seed, an integer >= 0 (default: the mission's world.seed).")
+@click.option(
+    "--seed", callback=_seed, metavar="SEED", help="World seed, an integer ≥ 0 (default: the mission's world.seed)."
+)
 @click.option(
     "--log",
     "log_path",
@@ -453,10 +447,11 @@ def verify(log: str) -> None:
 @click.option(
     "--seed",
     "base_seed",
-    type=SEED,
+    callback=_seed,
+    metavar="SEED",
     default=0,
     show_default=True,
-    help="Seed of trial 0, an integer >= 0 (trial i: seed + i).",
+    help="Seed of trial 0, an integer ≥ 0 (trial i: seed + i).",
 )
 @_set_option
 @click.option("--vary", multiple=True, metavar="KEY=V1,V2", help="Values to compare (cartesian product of all --vary).")

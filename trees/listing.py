@@ -53,12 +53,12 @@ def plain(text: str) -> str:
 
 
 def first_sentence(text: str) -> str:
-    """The first sentence of ``text`` (whitespace joined), whole: "Fig. 5", "et al." or "§4.2." inside do not end it."""
+    """The first sentence of ``text`` (whitespace joined), whole: "Fig. 5", "et al." or an initial do not end it."""
     words = " ".join(text.split())
     for match in _SENTENCE_END.finditer(words):
-        before = words[: match.start()].rpartition(" ")[2].lstrip("(").lower()
-        if match.group(1) == "." and (before in ABBREVIATIONS or re.fullmatch(r"[a-z]", before)):
-            continue
+        before = words[: match.start()].rpartition(" ")[2].lstrip("(")
+        if match.group(1) == "." and (before.lower() in ABBREVIATIONS or re.fullmatch(r"[A-Z]", before)):
+            continue  # "et al.", "Fig.", an initial
         return words[: match.end(1)]
     return words
 

@@ -38,7 +38,7 @@ import importlib
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Literal, get_args
+from typing import Any, Literal, cast, get_args
 
 __all__ = [
     "AGGREGATIONS",
@@ -84,6 +84,12 @@ class MetricSpec:
             raise ValueError(f"metric {self.name}: aggregation {self.aggregation!r}, expected one of {AGGREGATIONS}")
         if not self.unit or not self.meaning.strip() or "\n" in self.meaning:
             raise ValueError(f"metric {self.name}: expected a unit and a one-line meaning")
+
+    @classmethod
+    def of(cls, record: Mapping[str, str]) -> MetricSpec:
+        """A declaration from plain data (``{"name", "unit", "meaning", "aggregation"}``, as the world keeps them)."""
+        aggregation = cast(Aggregation, record.get("aggregation", "last"))  # checked by __post_init__
+        return cls(record["name"], record["unit"], record["meaning"], aggregation)
 
     @property
     def event_like(self) -> bool:

@@ -138,14 +138,13 @@ class Registry:
     def resolve(self, kind: str, name: str) -> type[MissionNode[Any]]:
         """The class of node ``name`` of ``kind`` (its metrics declared); MissionError if unknown or ambiguous."""
         group, base = GROUPS[kind]
-        pin = self.pins.get(name)
-        provider = None if pin is not None else self.provider(kind, name)
-        cls = import_target(pin if provider is None else provider.target)
+        provider = None if name in self.pins else self.provider(kind, name)
+        cls = import_target(self.pins[name] if provider is None else provider.target)
         if not (isinstance(cls, type) and issubclass(cls, base)):
             if provider is not None:
                 raise MissionError(f"entry point '{name}' of group {group} ({provider}) is not a {base.__name__}")
             raise MissionError(
-                f"plugin '{pin}' pinned for {kind} '{name}' is not a {base.__name__}",
+                f"plugin '{self.pins[name]}' pinned for {kind} '{name}' is not a {base.__name__}",
                 expected=f"a subclass of marsupial.trees.skill.{base.__name__}",
             )
         try:

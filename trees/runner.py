@@ -70,7 +70,7 @@ POSE_PERIOD = 0.2  # s of simulated time between recorded robot poses (5 Hz keep
 RUNS_DIR = Path("runs")  # where runs log by default, relative to the current folder
 #: the metrics recorded by the runner (batteries) and by the referee it attaches (marsupial.world.scoring)
 declare(MetricSpec("battery_soc", "fraction", "battery state of charge"), owner=__name__)
-declare(*(MetricSpec(**score) for score in SCORES), owner="marsupial.world.scoring:Referee")
+declare(*(MetricSpec.of(score) for score in SCORES), owner="marsupial.world.scoring:Referee")
 
 
 @dataclass

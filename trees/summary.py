@@ -98,8 +98,9 @@ def _run_table(result: RunResult, until: float | None, run_story: RunStory | Non
     for name, state in result.robots.items():
         told = None if run_story is None else run_story.milestones.get(name, [])
         table.add_row(Text(name), _robot_text(name, state, told))
-    for name in sorted(set(run_story.milestones) - set(result.robots)) if run_story is not None else ():
-        table.add_row(Text(name), Text(tell(run_story.milestones[name])))
+    others = {} if run_story is None else run_story.milestones
+    for name in sorted(set(others) - set(result.robots)):  # milestones of a robot the result does not list
+        table.add_row(Text(name), Text(tell(others[name])))
     if result.message:
         table.add_row("error", Text(result.message.strip().splitlines()[-1], style="red"))
     return table
