@@ -169,10 +169,10 @@ def owners(name: str) -> tuple[str, ...]:
 def _load_all() -> None:
     """Import every installed skill and condition (and the recorder modules) so that their declarations register.
 
-    A plug-in that fails to import is left out here (``marsupial skills NAME`` reports it).
+    A plug-in that fails to import or declares a metric inconsistently is left out here
+    (``marsupial skills NAME`` and compiling a mission that uses it report it).
     """
     global _loaded
-    from .errors import MissionError
     from .registry import GROUPS, import_target, installed
 
     for module in RECORDER_MODULES:
@@ -182,7 +182,7 @@ def _load_all() -> None:
             for provider in providers:
                 try:
                     declare_node(import_target(provider.target))
-                except (MissionError, ValueError):
+                except Exception:  # a broken plug-in must not stop a report or a summary
                     continue
     _loaded = True
 
