@@ -16,13 +16,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import ClassVar, Literal
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.api.capabilities import HasBase, Rotorcraft
+from marsupial.trees.milestones import milestone
 from marsupial.trees.skill import NodeParams, Skill
 
 #: capabilities of the robots the skills below accept
@@ -74,6 +75,8 @@ class Goto(Skill["Goto.Params"]):
         distance = float(np.linalg.norm(error))
         self.feedback_message = f"{distance:.2f} m to go"
         if distance <= self.params.tolerance:
+            motors = ", motors off" if self.params.then == "motors_off" else ""
+            milestone(self, f"reached {_point(self.params.target)}", detail=_named(self) + motors)
             return Status.SUCCESS
         v = self.params.gain * error
         speed = float(np.linalg.norm(v))
@@ -133,10 +136,21 @@ class DriveTo(Skill["DriveTo.Params"]):
         distance = math.dist(p.target, estimate.position[:2])
         self.feedback_message = f"{distance:.2f} m to go"
         if distance <= p.tolerance:
+            milestone(self, f"reached {_point(p.target)}", detail=_named(self))
             return Status.SUCCESS
         self.robot.drive(*unicycle_command(estimate.position[:2], estimate.yaw, p.target, p.speed, p.turn_rate,
                                            p.heading_gain))
         return Status.RUNNING
+
+
+def _point(xyz: Sequence[float]) -> str:
+    """``"(2.0, 0.0, 1.5) m"``: a target point for a milestone."""
+    return "(" + ", ".join(f"{v:.1f}" for v in xyz) + ") m"
+
+
+def _named(skill: Skill[Any]) -> str:
+    """The node's name when the mission gave it one (a milestone's detail), else ``""``."""
+    return skill.name if skill.name != skill.kind else ""
 
 
 def unicycle_command(position: Sequence[float] | np.ndarray, yaw: float, target: Sequence[float] | np.ndarray,

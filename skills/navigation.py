@@ -46,7 +46,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Annotated, Any
+from typing import Annotated, Any, ClassVar
 
 import cv2
 import numpy as np
@@ -55,6 +55,8 @@ from pydantic import Field
 
 from marsupial.api.capabilities import HasBase, HasLidar
 from marsupial.sensing import body_pose, in_nav_frame, scan_in_body, sensor_mount
+from marsupial.trees.metrics import MetricSpec
+from marsupial.trees.milestones import milestone
 from marsupial.trees.skill import NodeParams, Skill
 
 MAX_SPEED = 2.0  # m/s, UGV longitudinal speed limit, Narváez §V-B-1
@@ -366,6 +368,10 @@ def pure_pursuit(
 class Navigate(Skill["Navigate.Params"]):
     """Drive a ground robot along a guide path or operator set-points, avoiding obstacles seen by its LiDAR."""
 
+    metrics: ClassVar[tuple[MetricSpec, ...]] = (
+        MetricSpec("path_progress", "fraction", "share of the guide path's length covered (on the estimate)"),
+    )
+
     class Params(NodeParams):
         path: str | list[Annotated[list[float], Field(min_length=2, max_length=2)]] | None = "operator_path"
         """Guide path γ_mm (§V-A): a path of the mission's building plan or [x, y] way-points (m, navigation frame).
@@ -464,6 +470,7 @@ class Navigate(Skill["Navigate.Params"]):
         if to_end <= p.goal_tolerance and s >= self.follower.length - p.goal_tolerance - 0.5:
             self.robot.stop()
             self.feedback_message = f"path end reached ({to_end:.2f} m)"
+            milestone(self, f"reached the end of '{self.name}'" if self.name != self.kind else "reached its path's end")
             return Status.SUCCESS
         if s > self.last_progress + 0.1:
             self.last_progress, self.last_progress_time = s, self.now

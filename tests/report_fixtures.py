@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import json
+import re
 import shutil
 from pathlib import Path
 
+import marsupial.missions
 from marsupial.trees.campaign import summarize
 from marsupial.trees.runner import run_mission
 
@@ -39,6 +41,27 @@ def hostile_log(folder: Path) -> Path:
     log = folder / "hostile.mcap"
     result = run_mission(str(mission), log_path=log, progress=False)
     assert result.outcome == "success", result.message
+    return log
+
+
+#: usar_docking's operator script made short: two dockings within a minute of simulated time
+TWO_DOCKINGS = """\
+operator:
+  - {at: 2.0, say: deploy, why: survey the hall}
+  - {at: 12.0, say: dock, why: first docking}
+  - {at: 30.0, say: deploy, why: survey again}
+  - {at: 40.0, say: dock, why: second docking}
+"""
+
+
+def usar_docking_twice(folder: Path) -> Path:
+    """usar_docking with the UAV deployed and docked twice in 60 s of simulated time; returns its log."""
+    text = (Path(marsupial.missions.__file__).parent / "usar_docking.yaml").read_text()
+    mission = folder / "usar_docking.yaml"
+    mission.write_text(re.sub(r"^operator:.*?\n(?=params:)", TWO_DOCKINGS, text, count=1, flags=re.S | re.M))
+    log = folder / "usar_docking.mcap"
+    result = run_mission(str(mission), log_path=log, progress=False, until=60)
+    assert result.outcome == "time_limit", result.message
     return log
 
 

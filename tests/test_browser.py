@@ -1,6 +1,8 @@
 """Reports in a real browser: headless Chromium (the system one, driven by playwright) renders the run and the
 campaign page without console errors, the map and the timeline are visible, and a node named
-``<script>alert(1)</script>`` is shown as text and never runs. Screenshots are saved in the test's folder.
+``<script>alert(1)</script>`` is shown as text and never runs. The usar_docking report draws the two docking
+times as two markers with the unit on the axis, and guards that never held with no FAILURE bar. Screenshots
+(pages at a 1280 × 900 viewport, figures at their own size) are saved in the test's folder.
 
 Needs ``chromium`` on the PATH (Debian: ``apt-get install chromium``; ``.ci/run`` installs it) and the
 ``playwright`` package (the test extra); without them the tests are skipped, saying which is missing.
@@ -13,7 +15,7 @@ from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
-from report_fixtures import HOSTILE, SCRIPT_NODE, fake_campaign
+from report_fixtures import HOSTILE, SCRIPT_NODE, fake_campaign, usar_docking_twice
 
 from marsupial.trees.cli import cli
 from marsupial.trees.report import write_report
@@ -92,3 +94,38 @@ def test_campaign_report_renders_in_chromium(browser, tmp_path):
     assert page.url.endswith("reports/trial_0003_seed_3.html")
     visible_box(page, "#map svg")
     visible_box(page, "#timeline svg")
+
+
+@pytest.fixture(scope="module")
+def usar_report(tmp_path_factory) -> Path:
+    return write_report(usar_docking_twice(tmp_path_factory.mktemp("usar")))
+
+
+def timeline_row(page, name: str) -> int:
+    """The timeline row index of the node called ``name`` (its label group ``timeline-label<row>``)."""
+    labels = page.locator('#timeline svg g[id^="timeline-label"]')
+    rows = [labels.nth(i) for i in range(labels.count()) if labels.nth(i).text_content().strip() == name]
+    assert len(rows) == 1, name
+    return int(rows[0].get_attribute("id").removeprefix("timeline-label"))
+
+
+def test_usar_docking_report_draws_what_happened(browser, usar_report, tmp_path):
+    page, problems, dialogs = open_page(browser, usar_report, tmp_path / "usar_docking.png")
+    assert problems == [] and dialogs == []
+    docking = page.locator("#metric-docking_time")
+    docking.screenshot(path=str(tmp_path / "docking_time.png"))
+    assert docking.locator("svg text", has_text="docking_time (s)").count() == 1  # the unit on the value axis
+    assert docking.locator("svg text", has_text="time from the start of tracking to the lock").count() == 1
+    markers = docking.locator('g[id="metric-docking_time-0"]')
+    assert markers.locator("use").count() == 2 and markers.locator(":scope > path").count() == 0  # no joining line
+    assert page.locator('#metric-battery_soc svg text', has_text="battery_soc (fraction 0–1)").count() == 1
+    timeline = page.locator("#timeline figure").first
+    timeline.screenshot(path=str(tmp_path / "timeline.png"))
+    for guard in ("when battery_below(0.2, robot=uav)", "battery_below@uav", "when area_explored(1.0)"):
+        row = timeline_row(page, guard)  # never held: drawn neutral, never as a failure
+        assert page.locator(f'#timeline svg g[id="timeline-row{row}-failure"]').count() == 0, guard
+        assert page.locator(f'#timeline svg g[id="timeline-row{row}-not_holding"]').count() == 1, guard
+    assert page.locator("#timeline svg text", has_text="end: time_limit").count() == 1
+    milestones = page.locator("#summary tr.milestones").inner_text()
+    assert milestones.count("docked at") == 2 and milestones.count("stored at") == 2
+    assert (tmp_path / "docking_time.png").stat().st_size > 5_000

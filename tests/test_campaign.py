@@ -157,3 +157,16 @@ def test_campaigns_of_one_run_need_folders_of_their_own(mission, tmp_path):
     with pytest.raises(MissionError, match="same folder"):
         run_campaigns([spec, CampaignSpec(mission, 2, tmp_path / "c" / ".." / "c")])
     assert not (tmp_path / "c").exists()  # refused before anything was written
+
+
+def test_campaign_command_ends_with_the_report_command(mission, tmp_path):
+    from click.testing import CliRunner
+
+    from marsupial.trees.cli import cli
+
+    out = tmp_path / "my campaign"
+    result = CliRunner().invoke(cli, ["campaign", mission, "--trials", "1", "--workers", "1", "--out", str(out),
+                                      "--until", "2"], env={"COLUMNS": "200"})
+    assert result.exit_code == 0, result.output
+    assert result.output.splitlines()[-1] == f"report: marsupial report '{out}'"
+    assert (out / "summary.json").is_file()

@@ -217,8 +217,9 @@ def test_export_writes_behaviortree_cpp_xml(tmp_path):
 def test_skills_and_schema():
     result = invoke("skills")
     assert result.exit_code == 0
-    for name in ("skill goto", "skill drive_to", "condition battery_below", "condition operator", "tolerance"):
-        assert name in result.output
+    rows = {line.split("│")[1].strip(): line for line in result.output.splitlines() if line.count("│") == 5}
+    assert "skill" in rows["goto"] and "skill" in rows["drive_to"] and "Rotorcraft" in rows["goto"]
+    assert "condition" in rows["battery_below"] and "condition" in rows["operator"]
     result = invoke("schema")
     schema = json.loads(result.output)
     assert "Node" in schema["$defs"] and "tree" in schema["properties"]

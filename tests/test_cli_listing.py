@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import pytest
 from click.testing import CliRunner
 
 from marsupial.trees.cli import cli
@@ -37,3 +38,50 @@ def test_missions_lists_every_shipped_mission_with_its_robots():
     for name in known_missions():
         assert name in result.output
     assert "uav: bebop2" in result.output and "carrier: mobile_manipulator" in result.output
+
+
+def test_missions_show_each_first_sentence_whole():
+    result = invoke("missions")
+    text = " ".join(line.strip("│ ").split("│")[-1].strip() for line in result.output.splitlines())
+    assert "Narváez et al. 2020 (§V-A, Fig. 13, Tables II-III) in the USAR building" in text
+    assert "Arora & Papachristos (§V, Fig. 5) in the collapsed-building mockup" in text
+    assert "Palafox et al. (2019, §4.2.1) on the Summit XL driving circles (0.5 m/s, 0.05 rad/s)." in text
+
+
+def test_skills_index_is_one_row_per_node_without_markup():
+    from marsupial.trees.registry import GROUPS, installed
+
+    result = invoke("skills")
+    assert result.exit_code == 0, result.output
+    nodes = sum(len(installed(kind)) for kind in GROUPS)
+    assert len(result.output.splitlines()) < 3 * nodes  # an index, not every parameter of every node
+    assert "``" not in result.output and ":class:" not in result.output and ":mod:" not in result.output
+    assert "(drive_to on the mother's estimate)" in result.output  # carry's ``drive_to``, plain
+
+
+def test_skills_detail_has_no_markup_and_lists_the_metrics():
+    result = invoke("skills", "contact")
+    assert result.exit_code == 0, result.output
+    assert "``" not in result.output and ":mod:" not in result.output
+    assert "farther than blind_range" in " ".join(result.output.split())
+    assert "docking_time (s, each): time from the start of tracking to the lock on Part A" in result.output
+
+
+@pytest.mark.parametrize("text, sentence", [
+    ("Zhao et al. (§3.3) dock. Then more.", "Zhao et al. (§3.3) dock."),
+    ("See Fig. 5 and Eq. 3 here. Next one.", "See Fig. 5 and Eq. 3 here."),
+    ("One sentence only", "One sentence only"),
+    ("Ends at 2.5 m. Next.", "Ends at 2.5 m."),
+])
+def test_first_sentence_is_not_cut_at_abbreviations(text, sentence):
+    from marsupial.trees.listing import first_sentence
+
+    assert first_sentence(text) == sentence
+
+
+def test_plain_removes_restructuredtext_markup():
+    from marsupial.trees.listing import plain
+
+    text = "Uses ``drive_to``, :class:`~marsupial.world.Onboard`, :mod:`.gust_guard`, *this* and **that**::"
+    assert plain(text) == "Uses drive_to, Onboard, .gust_guard, this and that:"
+    assert plain("2 * x * 3") == "2 * x * 3"

@@ -83,7 +83,9 @@ def test_negative_seeds_are_refused_everywhere(tmp_path):
     assert_bad_input(marsupial("tree", str(path)), "world.seed: invalid value -1; expected a value >= 0")
     good = mission_file(tmp_path, BASE, "good.yaml")
     assert_bad_input(marsupial("run", str(good), "--set", "world.seed=-3"), "value set by --set world.seed=-3")
-    assert_bad_input(marsupial("run", str(good), "--seed", "-3"), "'--seed': -3 is not in the range x>=0")
+    for given, shown in (("-3", "-3"), ("abc", "'abc'"), ("1.5", "'1.5'")):
+        expected = f"'--seed': {shown} is not a seed; expected an integer ≥ 0"
+        assert_bad_input(marsupial("run", str(good), "--seed", given), expected)
     assert_bad_input(
         marsupial("campaign", str(good), "--trials", "1", "--seed", "-1", "--out", str(tmp_path / "c")), "--seed"
     )

@@ -129,3 +129,57 @@ def test_a_port_in_use_is_bad_input(tmp_path):
     assert result.returncode == 2 and "Traceback" not in result.stderr
     assert f"--live: cannot serve on 127.0.0.1:{port}" in result.stderr and "Address already in use" in result.stderr
     assert not (tmp_path / "runs").exists()  # nothing ran
+
+
+async def visit(url: str, subprotocol: str) -> str:
+    """Connect with only ``subprotocol``, read the server info, leave; returns the server's name or the refusal."""
+    try:
+        async with websockets.connect(url, subprotocols=[subprotocol], open_timeout=10) as ws:
+            while True:
+                frame = await asyncio.wait_for(ws.recv(), 10)
+                if isinstance(frame, str) and json.loads(frame)["op"] == "serverInfo":
+                    return json.loads(frame)["name"]
+    except websockets.exceptions.InvalidStatus as refused:
+        return f"refused: HTTP {refused.response.status_code}"
+
+
+async def visits_then_stay(url: str) -> tuple[list[str], list[dict], int | None]:
+    """Five visits, three legacy ones, then a client until the end: (visit results, its status messages, close code)."""
+    results = [await visit(url, SUBPROTOCOL) for _ in range(5)]
+    results += [await visit(url, "foxglove.websocket.v1") for _ in range(3)]
+    statuses = []
+    async with websockets.connect(url, subprotocols=[SUBPROTOCOL], open_timeout=10) as ws:
+        try:
+            while True:
+                frame = await asyncio.wait_for(ws.recv(), 30)
+                if isinstance(frame, str) and json.loads(frame)["op"] == "status":
+                    statuses.append(json.loads(frame))
+        except websockets.exceptions.ConnectionClosedOK:
+            pass
+        return results, statuses, ws.close_code
+
+
+def test_clients_come_and_go_quietly_and_hear_how_the_run_ended(tmp_path):
+    """Five clients connect and leave, a legacy client is refused thrice, one stays: the run prints one line for it."""
+    process, url, _ = start_live(tmp_path, "demo_hover", "--speed", "2", "--no-log")
+    try:
+        results, statuses, code = asyncio.run(visits_then_stay(url))
+    finally:
+        out, err = process.communicate(timeout=120)
+    assert process.returncode == 0, err
+    assert results == ["marsupial"] * 5 + ["refused: HTTP 400"] * 3
+    assert "Traceback" not in err and "AttributeError" not in err and "Callback failed" not in err
+    [refusal] = [line for line in err.splitlines() if "refused" in line]  # once, not once per attempt
+    assert refusal.startswith("live: a client at 127.0.0.1 was refused") and "foxglove.websocket.v1" in refusal
+    assert [s["message"] for s in statuses] == ["run ended: success at 12.9 s (simulated); the live view stops"]
+    assert code == 1005  # the SDK's close frame carries no status code; the connection still closes cleanly
+
+
+def test_the_live_sink_implements_every_listener_hook():
+    from foxglove.websocket import ServerListener
+
+    from marsupial.trees.live import LiveSink
+
+    hooks = [name for name in dir(ServerListener) if name.startswith("on_")]
+    assert len(hooks) >= 12 and ServerListener in LiveSink.__mro__
+    assert all(callable(getattr(LiveSink, name)) for name in hooks)

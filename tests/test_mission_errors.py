@@ -176,3 +176,12 @@ def test_unknown_reference_does_not_hide_other_errors():
         ("bad.yaml:3:38", "unknown parameter reference '${h}'"),
         ("bad.yaml:3:51", "unknown parameter reference '${n}'"),
     ]
+
+
+def test_a_list_too_short_for_its_tuple_names_what_was_expected():
+    from marsupial.trees.compiler import compile_mission
+
+    text = "mission: m\nteam:\n  uav: {robot: bebop2}\ntree: {skill: goto, robot: uav, params: {target: [2, 0]}}\n"
+    with pytest.raises(MissionError) as caught:
+        compile_mission(parse_mission(text, "bad.yaml"))
+    assert str(caught.value) == "bad.yaml:4:42: tree.params.target: 2 items given; expected a list of 3 numbers"

@@ -29,10 +29,12 @@ from reachability import first_forbidden
 import marsupial.missions
 import marsupial.skills
 import marsupial.trees
+from marsupial.trees import metrics
 from marsupial.trees.compiler import compile_mission
 from marsupial.trees.host import TreeHost
 from marsupial.trees.mission import load_mission
 from marsupial.trees.registry import Registry
+from marsupial.trees.replay import read_log
 from marsupial.trees.runner import run_mission
 
 SKILLS_DIR = Path(marsupial.skills.__file__).resolve().parent
@@ -180,11 +182,14 @@ def walker(monkeypatch: pytest.MonkeyPatch) -> _Walker:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("path", SHIPPED + COVERAGE, ids=lambda p: p.stem)
-def test_no_node_can_reach_the_simulator_or_the_referee(path: Path, walker: _Walker) -> None:
+def test_no_node_can_reach_the_simulator_or_the_referee(path: Path, walker: _Walker, tmp_path: Path) -> None:
+    """Nothing a node holds leads to the simulator; every node ticks; (the same run's log) every metric is declared."""
     py_trees.blackboard.Blackboard.clear()
-    result = run_mission(path, progress=False)
+    result = run_mission(path, progress=False, log_path=tmp_path / "run.mcap")
     assert result.outcome in ("success", "time_limit"), result.message
     assert walker.hits == [], walker.hits[0]
+    recorded = read_log(tmp_path / "run.mcap").metrics
+    assert recorded and metrics.undeclared(m["name"] for m in recorded) == []  # marsupial.trees.metrics
     expected = _kinds(path) - NOT_TICKED.get(path.stem, set())
     assert expected <= walker.ticked, f"never ticked: {sorted(expected - walker.ticked)}"
 

@@ -14,6 +14,7 @@ import shlex
 import shutil
 import sys
 import tempfile
+import warnings
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -77,8 +78,17 @@ def _compiled(mission_ref: str, sets: tuple[str, ...]) -> Any:
     return compile_mission(load_mission(mission_ref, _assignments(sets, "--set")))
 
 
-#: a seed: any non-negative integer (numpy's seed sequences take no negative numbers)
-SEED = click.IntRange(min=0)
+def _seed(ctx: click.Context, param: click.Parameter, value: str | int | None) -> int | None:
+    """Check a seed option: an integer ≥ 0 (numpy's seed sequences take no negative numbers); exit 2 otherwise."""
+    if value is None or (isinstance(value, int) and not isinstance(value, bool) and value >= 0):
+        return value
+    try:
+        number = int(str(value).strip(), 10)
+    except ValueError:
+        raise click.BadParameter(f"{value!r} is not a seed; expected an integer ≥ 0") from None
+    if number < 0:
+        raise click.BadParameter(f"{number} is not a seed; expected an integer ≥ 0")
+    return number
 
 
 def _positive_time(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
@@ -108,11 +118,20 @@ _set_option = click.option(
 @click.version_option(marsupial.__version__, prog_name="marsupial")
 def cli() -> None:
     """Behaviour-tree missions for marsupial robot teams."""
+    warnings.showwarning = _show_warning
+
+
+def _show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                  file: Any = None, line: str | None = None) -> None:
+    """Print a Python warning (e.g. a plug-in's name collision) as one ``warning: …`` line on stderr."""
+    _err.print(Text.assemble(("warning:", "bold yellow"), " ", str(message)), highlight=False, soft_wrap=True)
 
 
 @cli.command()
 @click.argument("mission", required=False, default=DEFAULT_MISSION)
-@click.option("--seed", type=SEED, help="World seed, an integer >= 0 (default: the mission's world.seed).")
+@click.option(
+    "--seed", callback=_seed, metavar="SEED", help="World seed, an integer ≥ 0 (default: the mission's world.seed)."
+)
 @click.option(
     "--log",
     "log_path",
@@ -271,12 +290,17 @@ def export(mission: str, fmt: str, output: str | None, sets: tuple[str, ...]) ->
 @cli.command()
 @click.argument("names", nargs=-1)
 def skills(names: tuple[str, ...]) -> None:
-    """List installed skills and conditions (or only NAMES) with their parameters, types, defaults and docs."""
+    """List the installed skills and conditions, one line each; with NAMES, each of those in detail.
+
+    The detail of a node: its documentation, the robots it acts on, its
+    parameters (types, defaults), blackboard keys, resources and metrics.
+    Exits 1 when a node it lists cannot be loaded (a broken plug-in), 2 for an unknown name.
+    """
     from .errors import one_of, suggest
-    from .registry import GROUPS, Registry, installed
+    from .listing import index_table, node_detail
+    from .registry import BUILTIN, GROUPS, installed
 
     console = Console()
-    registry = Registry()
     available = {name: (kind, providers) for kind in GROUPS for name, providers in installed(kind).items()}
     with bad_input():
         for wanted in names:
@@ -286,66 +310,53 @@ def skills(names: tuple[str, ...]) -> None:
                     expected=one_of(available),
                     suggestion=suggest(wanted, available),
                 )
-    for name, (kind, providers) in available.items():
-        if names and name not in names:
-            continue
-        for provider in providers:
-            try:
-                cls = registry.resolve(kind, name) if len(providers) == 1 else _load(provider.target)
-            except MissionError as err:
-                console.print(Text.assemble(f"{kind} {name} ({provider}): ", (str(err), "red")))
-                continue
-            title = Text.assemble(f"{kind} ", (name, "bold"), f"  from {provider.distribution}: {provider.target}")
-            console.print(_node_table(title, cls))
+    listed = [(kind, name, provider, _load_node(kind, provider.target))
+              for name, (kind, providers) in available.items() if not names or name in names for provider in providers]
+    if names:
+        for kind, name, provider, loaded in listed:
+            if not isinstance(loaded, str):
+                console.print(node_detail(kind, name, str(provider), loaded))
+    else:
+        console.print(index_table(
+            (kind, name, loaded, "" if provider.distribution == BUILTIN else str(provider))
+            for kind, name, provider, loaded in listed
+        ))
+    failed = [(kind, name, provider, loaded) for kind, name, provider, loaded in listed if isinstance(loaded, str)]
+    for kind, name, provider, loaded in failed:
+        _err.print(Text.assemble(("error:", "bold red"), f" {kind} '{name}' of {provider} cannot be loaded: {loaded}"),
+                   highlight=False, soft_wrap=True)
+    if failed:
+        sys.exit(1)
 
 
-def _node_table(title: Text, cls: Any) -> Table:
-    """The ``skills`` table of one node class: its parameters, blackboard ports, summary and robots."""
-    table = Table(title=title, title_justify="left")
-    for column in ("parameter", "type", "default", "description"):
-        table.add_column(column)
-    needs = ", ".join(c.__name__ for c in cls.robot_kinds or ())
-    kinds = "no robot" if not cls.uses_robot else needs or "any robot"
-    primary = f" Primary: {cls.primary}." if getattr(cls, "primary", None) else ""
-    table.caption = Text(f"{cls.summary()} Robots: {kinds}.{primary}")
-    table.caption_justify = "left"
-    for field_name, info in cls.Params.model_fields.items():
-        default = "(required)" if info.is_required() else repr(info.default)
-        cells = (field_name, _type_text(info.annotation), default, info.description or "")
-        table.add_row(*(Text(cell) for cell in cells))
-    for port, keys in (("reads", cls.reads), ("writes", cls.writes)):
-        if keys:
-            table.add_row(Text(port, "dim"), "blackboard", Text(", ".join(keys)), "")
-    return table
+def _load_node(kind: str, target: str) -> Any:
+    """The node class an entry point names, or the text of why it cannot be loaded."""
+    from .registry import GROUPS, import_target
+
+    base = GROUPS[kind][1]
+    try:
+        cls = import_target(target)
+    except MissionError as err:
+        return str(err)
+    except Exception as err:  # a plug-in module that raises on import
+        return f"importing '{target}' raised {type(err).__name__}: {err}"
+    if not (isinstance(cls, type) and issubclass(cls, base)):
+        return f"'{target}' is not a {base.__name__}"
+    return cls
 
 
 @cli.command()
 def missions() -> None:
-    """List the missions shipped with the package, with their descriptions."""
+    """List the missions shipped with the package: team and the first sentence of each description."""
+    from .listing import missions_table
     from .mission import known_missions, load_mission
 
-    table = Table(title="missions (marsupial run NAME)", title_justify="left")
-    for column in ("mission", "robots", "description"):
-        table.add_column(column)
+    rows = []
     for name in known_missions():
         spec = load_mission(name).spec
         robots = ", ".join(f"{member}: {m.robot}" for member, m in spec.team.items())
-        first_sentence = " ".join(spec.description.split()).split(". ")[0].rstrip(".")
-        table.add_row(Text(name, "bold"), Text(robots), Text(first_sentence + "."))
-    Console().print(table)
-
-
-def _type_text(annotation: Any) -> str:
-    """``float``, ``tuple[float, float, float]``, ``Literal['hover', 'motors_off']``."""
-    if getattr(annotation, "__origin__", None) is None and isinstance(annotation, type):
-        return annotation.__name__
-    return str(annotation).replace("typing.", "")
-
-
-def _load(target: str) -> Any:
-    from .registry import import_target
-
-    return import_target(target)
+        rows.append((name, robots, spec.description))
+    Console().print(missions_table(rows))
 
 
 @cli.command()
@@ -475,10 +486,11 @@ def verify(log: str) -> None:
 @click.option(
     "--seed",
     "base_seed",
-    type=SEED,
+    callback=_seed,
+    metavar="SEED",
     default=0,
     show_default=True,
-    help="Seed of trial 0, an integer >= 0 (trial i: seed + i).",
+    help="Seed of trial 0, an integer ≥ 0 (trial i: seed + i).",
 )
 @_set_option
 @click.option("--vary", multiple=True, metavar="KEY=V1,V2", help="Values to compare (cartesian product of all --vary).")
@@ -513,7 +525,10 @@ def campaign(
     logs: str,
     resume: bool,
 ) -> None:
-    """Run independent seeded trials of MISSION in parallel; write trials.json/.csv and summary.json in --out."""
+    """Run independent seeded trials of MISSION in parallel; write trials.json/.csv and summary.json in --out.
+
+    Ends by printing the `marsupial report` command that turns the folder into an HTML page.
+    """
     from .campaign import run_campaign
 
     try:
@@ -550,6 +565,7 @@ def campaign(
             ", ".join(f"{k} {n}" for k, n in group["outcomes"].items()),
         )
     Console().print(table)
+    click.echo(f"report: marsupial report {shlex.quote(out)}")
 
 
 def main(argv: list[str] | None = None) -> None:

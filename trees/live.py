@@ -11,38 +11,109 @@ shows simulated time. A client that subscribes after the start is sent the
 last ``/scene`` and ``/tree/xml`` message (they are written once), so it sees
 the scene and the tree whenever it connects.
 
+The server stays quiet: the sink implements every hook of the SDK's
+``ServerListener`` (a missing one made the SDK print an ``AttributeError``
+on every disconnect), and the SDK's own log lines go through
+:class:`SdkLogLines`, which prints one clear line for a refused client (a
+client that offers only the legacy subprotocol ``foxglove.websocket.v1`` is
+refused by 0.30, and retries every half second) and passes other warnings
+on as one line each. At the end of a run every client gets a status
+message with the outcome before the server stops (the SDK then sends a
+close frame without a status code, which clients report as 1005).
+
 Message times are simulated nanoseconds, as in the log.
 """
 
 from __future__ import annotations
 
+import logging
+import re
+import sys
 import threading
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any, cast
+from typing import Any, TextIO
 
-if TYPE_CHECKING:
-    from foxglove.websocket import ServerListener
+from foxglove.websocket import ServerListener
 
-__all__ = ["DEFAULT_HOST", "DEFAULT_PORT", "LATCHED_TOPICS", "LiveSink"]
+__all__ = ["DEFAULT_HOST", "DEFAULT_PORT", "LATCHED_TOPICS", "SUBPROTOCOL", "LiveSink", "SdkLogLines"]
 
 DEFAULT_HOST = "127.0.0.1"  # only this machine; --host 0.0.0.0 opens the run to the network
 DEFAULT_PORT = 8765  # Foxglove's default WebSocket port
 #: topics written once per run (or per tree structure): re-sent to every client that subscribes later
 LATCHED_TOPICS = frozenset({"/scene", "/tree/xml"})
+SUBPROTOCOL = "foxglove.sdk.v1"  # the WebSocket subprotocol of foxglove-sdk 0.30
+LEGACY_SUBPROTOCOL = "foxglove.websocket.v1"  # what older Foxglove apps and libraries offer
+_REFUSED = re.compile(r"Dropping client (?P<address>\S+?):\d+: handshake failed")
 
 
-class LiveSink:
+class SdkLogLines(logging.Handler):
+    """The SDK's log records (logger ``foxglove``) as ``live:`` lines on ``stream``, warnings and errors only.
+
+    A refused WebSocket handshake is explained once per client address (its
+    retries are not printed again); any other record is printed as it is.
+    """
+
+    def __init__(self, stream: TextIO | None = None):
+        super().__init__(logging.WARNING)
+        self.stream = stream
+        self.refused: set[str] = set()
+
+    def emit(self, record: logging.LogRecord) -> None:
+        """Print ``record`` as one line (see the class docstring)."""
+        text = record.getMessage()
+        refused = _REFUSED.search(text)
+        if refused is not None:
+            address = refused["address"]
+            if address in self.refused:
+                return
+            self.refused.add(address)
+            text = (
+                f"a client at {address} was refused: its WebSocket handshake failed. This server speaks "
+                f"{SUBPROTOCOL}; a client offering only the legacy {LEGACY_SUBPROTOCOL} (an older Foxglove app "
+                "or library) cannot connect: update it (its retries are not printed)"
+            )
+        else:
+            text = f"{record.levelname.lower()} from the Foxglove server: {text}"
+        print(f"live: {text}", file=self.stream or sys.stderr, flush=True)
+
+
+_sdk_lines: SdkLogLines | None = None
+
+
+def _route_sdk_logs() -> SdkLogLines:
+    """Send the SDK's log records to one :class:`SdkLogLines` (once per process; the root logger left as it was)."""
+    global _sdk_lines
+    if _sdk_lines is None:
+        import foxglove
+
+        root = logging.getLogger()
+        handlers, level = list(root.handlers), root.level
+        foxglove.set_log_level("WARNING")  # records now reach Python's logging; it may configure the root logger
+        for handler in root.handlers[len(handlers):]:
+            root.removeHandler(handler)
+        root.setLevel(level)
+        sdk = logging.getLogger("foxglove")
+        sdk.propagate = False
+        _sdk_lines = SdkLogLines()
+        sdk.addHandler(_sdk_lines)
+    return _sdk_lines
+
+
+class LiveSink(ServerListener):
     """A Foxglove WebSocket server on ``host:port`` (``port`` 0: any free port) as a recorder sink.
 
     The server starts in the constructor (clients may connect before the run
     starts) and stops at :meth:`close`. :attr:`url` is the address to open in
-    Foxglove (**Open connection → Foxglove WebSocket**).
+    Foxglove (**Open connection → Foxglove WebSocket**). As the server's
+    listener it inherits every hook of ``ServerListener`` (the SDK's
+    defaults: nothing to do) and overrides :meth:`on_subscribe`.
     """
 
     def __init__(self, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, name: str = "marsupial"):
         import foxglove
         from foxglove.websocket import Capability
 
+        _route_sdk_logs()
         self._foxglove = foxglove
         self.host = host
         self.context = foxglove.Context()
@@ -56,7 +127,7 @@ class LiveSink:
             host=host,
             port=port,
             capabilities=[Capability.Time],
-            server_listener=cast("ServerListener", self),
+            server_listener=self,
             context=self.context,
         )
 
@@ -103,7 +174,17 @@ class LiveSink:
             self.server.broadcast_time(ns)
 
     def metadata(self, name: str, record: Mapping[str, str]) -> None:
-        """The live view has no metadata records (the log file keeps them)."""
+        """Tell every client how the run ended (the ``outcome`` record, written at its end) as a status message.
+
+        Other records (the run's metadata) stay in the log file.
+        """
+        if name == "outcome" and not self._stopped:
+            from foxglove.websocket import StatusLevel
+
+            outcome, at = record.get("outcome", "?"), record.get("sim_time", "?")
+            level = StatusLevel.Info if outcome == "success" else StatusLevel.Warning
+            self.server.publish_status(f"run ended: {outcome} at {at} s (simulated); the live view stops", level,
+                                       id="run_end")
 
     def close(self) -> None:
         """Stop the server (clients are disconnected); safe to call more than once."""

@@ -6,8 +6,8 @@ Channels (see ``docs/logs.md`` for every field):
 topic                    schema                             what
 =======================  =================================  ==============================================
 ``/events``              ``marsupial.Event``                run_start, state_change, preemption, operator,
-                                                            outcome, run_end, error, unintended_contact,
-                                                            rim_contact
+                                                            outcome, run_end, error, milestone,
+                                                            unintended_contact, rim_contact
 ``/metrics``             ``marsupial.Metric``               ``{name, value, labels}``
 ``/log``                 ``foxglove.Log``                   one text line per event, plus free text
 ``/tf``                  ``foxglove.FrameTransform``        ``world`` -> ``<robot>`` per robot (true pose)
@@ -109,6 +109,7 @@ EVENT_KINDS: dict[str, tuple[str, ...]] = {
     "outcome": ("node", "skill", "robot", "status", "message"),
     "run_end": ("outcome", "sim_time"),
     "error": ("message",),
+    "milestone": ("robot", "what"),  # a result a skill reached (marsupial.trees.milestones)
     "unintended_contact": ("uav", "carrier", "uav_link", "carrier_link"),  # the referee (marsupial.world.scoring)
     "rim_contact": ("carrier", "part", "wall"),  # the referee (marsupial.world.rim_contacts)
 }

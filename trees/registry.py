@@ -4,8 +4,11 @@ Every installed distribution registers its nodes under the entry-point
 groups ``marsupial.skills`` and ``marsupial.conditions`` (``name =
 "pkg.module:Class"``); marsupial registers its own the same way in its
 ``pyproject.toml``. A mission may pin the implementation of a name
-(``plugins: {hover: my_pkg.nodes:Hover}``); a name offered by two
-distributions without a pin is an error naming both providers.
+(``plugins: {hover: my_pkg.nodes:Hover}``). A plug-in that offers the name
+of one of marsupial's own nodes never changes what a mission means: without
+a pin the mission gets marsupial's node, and the collision is reported once
+per process as a :class:`PluginCollision` warning naming both providers. A
+name offered by two other distributions and no pin is an error naming both.
 
 Lookup failures raise :class:`~marsupial.trees.errors.MissionError` without
 a location; the compiler re-raises them at the node's file:line.
@@ -14,14 +17,19 @@ a location; the compiler re-raises them at the node's file:line.
 from __future__ import annotations
 
 import importlib
-from collections.abc import Mapping
+import warnings
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
 from importlib.metadata import entry_points
 from typing import Any
 
 from .errors import MissionError, one_of, suggest
+from .metrics import declare_node
 from .skill import Condition, MissionNode, Skill
+
+#: the distribution whose node a name means unless the mission pins another
+BUILTIN = "marsupial"
 
 #: node kind -> (entry-point group, base class)
 GROUPS: dict[str, tuple[str, type[MissionNode[Any]]]] = {
@@ -42,9 +50,34 @@ class Provider:
         return f"{self.distribution} ({self.target})"
 
 
+class PluginCollision(UserWarning):
+    """A plug-in offers the name of a marsupial node: missions keep marsupial's unless they pin the plug-in's."""
+
+
+_reported: set[tuple[str, str]] = set()  # (kind, name) collisions already reported in this process
+
+
+def _report_collision(kind: str, name: str, builtin: Provider, others: Sequence[Provider]) -> None:
+    """Warn once per process that ``others`` also offer ``name``, and how a mission picks one of them."""
+    if (kind, name) in _reported:
+        return
+    _reported.add((kind, name))
+    listed = " and by ".join(str(p) for p in others)
+    warnings.warn(
+        PluginCollision(
+            f"{kind} '{name}' is provided by {builtin} and by {listed}: missions use {builtin.distribution}'s "
+            f"unless they pin another, e.g. 'plugins: {{{name}: {others[0].target}}}'"
+        ),
+        stacklevel=3,
+    )
+
+
 @cache
 def installed(kind: str) -> dict[str, tuple[Provider, ...]]:
-    """Installed providers of skills (``kind="skill"``) or conditions, by name (cached per process)."""
+    """Installed providers of skills (``kind="skill"``) or conditions, by name (cached per process).
+
+    A name's providers are in a fixed order: marsupial's first, then by distribution name.
+    """
     group = GROUPS[kind][0]
     found: dict[str, list[Provider]] = {}
     for ep in entry_points(group=group):
@@ -53,7 +86,12 @@ def installed(kind: str) -> dict[str, tuple[Provider, ...]]:
         providers = found.setdefault(ep.name, [])
         if provider not in providers:  # one distribution seen twice on sys.path
             providers.append(provider)
-    return {name: tuple(p) for name, p in sorted(found.items())}
+    return {name: tuple(sorted(p, key=_provider_order)) for name, p in sorted(found.items())}
+
+
+def _provider_order(provider: Provider) -> tuple[bool, str, str]:
+    """Sort key of a name's providers: marsupial's first, then by distribution and target."""
+    return provider.distribution != BUILTIN, provider.distribution, provider.target
 
 
 def import_target(target: str) -> type:
@@ -98,32 +136,45 @@ class Registry:
         return installed(kind).get(name, ())
 
     def resolve(self, kind: str, name: str) -> type[MissionNode[Any]]:
-        """The class implementing node ``name`` of ``kind``; MissionError if unknown or ambiguous."""
+        """The class of node ``name`` of ``kind`` (its metrics declared); MissionError if unknown or ambiguous."""
         group, base = GROUPS[kind]
-        if name in self.pins:
-            cls = import_target(self.pins[name])
-            if not (isinstance(cls, type) and issubclass(cls, base)):
-                raise MissionError(
-                    f"plugin '{self.pins[name]}' pinned for {kind} '{name}' is not a {base.__name__}",
-                    expected=f"a subclass of marsupial.trees.skill.{base.__name__}",
-                )
-            return cls
+        provider = None if name in self.pins else self.provider(kind, name)
+        cls = import_target(self.pins[name] if provider is None else provider.target)
+        if not (isinstance(cls, type) and issubclass(cls, base)):
+            if provider is not None:
+                raise MissionError(f"entry point '{name}' of group {group} ({provider}) is not a {base.__name__}")
+            raise MissionError(
+                f"plugin '{self.pins[name]}' pinned for {kind} '{name}' is not a {base.__name__}",
+                expected=f"a subclass of marsupial.trees.skill.{base.__name__}",
+            )
+        try:
+            declare_node(cls)
+        except ValueError as err:  # a metric declared again with another unit, meaning or aggregation
+            raise MissionError(f"{kind} '{name}': {err}", expected="one declaration per metric name") from None
+        return cls
+
+    def provider(self, kind: str, name: str) -> Provider:
+        """The provider a mission without a pin gets for ``name``: the only one, or marsupial's (warned once).
+
+        MissionError for an unknown name, or one offered by several other distributions.
+        """
         providers = self.providers(kind, name)
         if not providers:
             known = self.names(kind)
             raise MissionError(
                 f"unknown {kind} '{name}'", expected=one_of(known), suggestion=suggest(name, known)
             )
-        if len(providers) > 1:
+        if len(providers) == 1:
+            return providers[0]
+        builtin = next((p for p in providers if p.distribution == BUILTIN), None)
+        if builtin is None:
             listed = " and ".join(str(p) for p in providers)
             raise MissionError(
                 f"{kind} '{name}' is provided by {listed}",
                 expected=f"one provider; pin one with 'plugins: {{{name}: <package.module:Class>}}'",
             )
-        cls = import_target(providers[0].target)
-        if not (isinstance(cls, type) and issubclass(cls, base)):
-            raise MissionError(f"entry point '{name}' of group {group} ({providers[0]}) is not a {base.__name__}")
-        return cls
+        _report_collision(kind, name, builtin, [p for p in providers if p is not builtin])
+        return builtin
 
     def skill(self, name: str) -> type[Skill[Any]]:
         """The skill class called ``name``."""

@@ -21,6 +21,7 @@ import io
 import json
 import struct
 import zlib
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -39,6 +40,7 @@ __all__ = [
     "compare_events",
     "format_timeline",
     "read_log",
+    "read_topics",
 ]
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
@@ -266,6 +268,23 @@ def read_log(path: str | Path) -> RunLog:
         schemas=schemas,
         _topics=topics,
     )
+
+
+def read_topics(path: str | Path, topics: Iterable[str]) -> dict[str, list[Message]]:
+    """Only the messages of ``topics`` of a log, by topic in time order (cheaper than :func:`read_log`).
+
+    For a log just written (the end-of-run summary reads ``/events`` and
+    ``/metrics`` back); :class:`LogError` if it cannot be read.
+    """
+    wanted = list(topics)
+    found: dict[str, list[Message]] = {topic: [] for topic in wanted}
+    try:
+        with open(path, "rb") as file:
+            for _, channel, message in make_reader(file).iter_messages(topics=wanted):
+                found[channel.topic].append(Message(message.log_time / 1e9, json.loads(message.data)))
+    except Exception as err:  # a missing, cut or corrupt file
+        raise LogError(f"{path}: cannot read {', '.join(wanted)} ({type(err).__name__}: {err})") from None
+    return found
 
 
 def _tree_snapshots(topics: dict[str, list[Message]]) -> list[TreeSnapshot]:

@@ -42,32 +42,35 @@ from typing import Any
 
 import py_trees
 from rich.console import Console
-from rich.live import Live
-from rich.table import Table
-from rich.text import Text
 
 from marsupial.api.errors import UnknownNameError, WorldError
 from marsupial.api.ticks import OperatorCommand
 from marsupial.world import World
 from marsupial.world.disturbances import apply_disturbances
 from marsupial.world.kidnap import spread_pose
-from marsupial.world.scoring import Referee
+from marsupial.world.scoring import SCORES, Referee
 from marsupial.world.team_link import TeamLinkConfig
 
 from .bridge import WorldBridge
 from .compiler import compile_mission
 from .errors import MissionError, check_seed, one_of, suggest
 from .isolation import TreeSide, open_tree_side
+from .metrics import MetricSpec, declare
 from .mission import Mission, load_mission
 from .operator import CONTROL_COMMANDS, OperatorChannel
+from .progress import ProgressLine, RobotStatus
 from .recorder import Recorder, Terminated
 from .sinks import Sink
+from .summary import read_story, summary_table
 
 #: outcome -> process exit code
 EXIT_CODES = {"success": 0, "interrupted": 130, "terminated": 143}
 METRIC_PERIOD = 1.0  # s of simulated time between battery samples
 POSE_PERIOD = 0.2  # s of simulated time between recorded robot poses (5 Hz keeps the log's cost low)
 RUNS_DIR = Path("runs")  # where runs log by default, relative to the current folder
+#: the metrics recorded by the runner (batteries) and by the referee it attaches (marsupial.world.scoring)
+declare(MetricSpec("battery_soc", "fraction", "battery state of charge"), owner=__name__)
+declare(*(MetricSpec.of(score) for score in SCORES), owner="marsupial.world.scoring:Referee")
 
 
 @dataclass
@@ -211,57 +214,9 @@ def battery_of(robot: Any) -> float | None:
     return None if battery is None else float(battery.soc)
 
 
-class _Progress:
-    """The live progress line (sim time, RTF, active skill and battery per robot); off when not a TTY."""
-
-    def __init__(self, console: Console, enabled: bool):
-        self.console = console
-        self.live: Live | None = None
-        if enabled and console.is_terminal:
-            self.live = Live(Text(""), console=console, refresh_per_second=8, transient=True)
-            self.live.start()
-        self._last = 0.0
-
-    def update(self, world: World, active: Mapping[str, Sequence[str]], wall: float, paused: bool) -> None:
-        if self.live is None or time.perf_counter() - self._last < 0.1:
-            return
-        self._last = time.perf_counter()
-        parts = [f"t {world.now:7.1f} s", f"RTF {world.now / wall if wall > 0 else 0:5.1f}x"]
-        if paused:
-            parts.append("PAUSED")
-        for name, robot in world.robots.items():
-            skills = ", ".join(active.get(name, ())) or "idle"
-            soc = battery_of(robot)
-            parts.append(f"{name}: {skills}" + (f" {soc:.0%}" if soc is not None else ""))
-        self.live.update(Text(" | ".join(parts)))
-
-    def stop(self) -> None:
-        if self.live is not None:
-            self.live.stop()
-
-
-def summary_table(result: RunResult) -> Table:
-    """The end-of-run summary: outcome, times, speed, log, robots and metrics."""
-    table = Table(title=f"mission {result.mission}", show_header=False, title_justify="left")
-    table.add_column("", style="bold")
-    table.add_column("")
-    style = "green" if result.outcome == "success" else "red"
-    table.add_row("outcome", Text(result.outcome, style=style))
-    table.add_row("seed", str(result.seed))
-    table.add_row("sim time", f"{result.sim_time:.2f} s ({result.ticks} ticks)")
-    table.add_row("wall time", f"{result.wall_time:.2f} s (RTF {result.real_time_factor:.1f}x)")
-    if result.log_path is not None:
-        table.add_row("log", Text(str(result.log_path)))
-    for name, state in result.robots.items():
-        text = "position [" + ", ".join(f"{v:.2f}" for v in state["position"]) + "] m"
-        if state.get("battery") is not None:
-            text += f", battery {state['battery']:.1%}"
-        table.add_row(Text(name), Text(text))
-    for name, value in sorted(result.metrics.items()):
-        table.add_row(Text(name), f"{value:.4g}")
-    if result.message:
-        table.add_row("error", Text(result.message.strip().splitlines()[-1], style="red"))
-    return table
+def robot_statuses(world: World, active: Mapping[str, Sequence[str]]) -> list[RobotStatus]:
+    """Each robot's running skills (names, from the tree side) and battery, for the progress line."""
+    return [RobotStatus(n, tuple(active.get(n, ())), battery_of(r)) for n, r in world.robots.items()]
 
 
 # ------------------------------------------------------------------ running
@@ -355,7 +310,7 @@ def run_mission(
     recorder = _open_recorder(mission, seed, until, log, sinks, record_images, world)
     bridge = WorldBridge(world, recorder, record_inputs)
     world.add_actor(Referee(world, bridge.scores))  # truth-based scores, world side: no node can read them
-    display = _Progress(console, progress)
+    display = ProgressLine(console, progress)
     outcome, message, ticks = "failure", "", _TickCount()
     started = time.perf_counter()
     host: TreeSide | None = None
@@ -389,7 +344,7 @@ def run_mission(
     )
     world.close()
     if progress:
-        console.print(summary_table(result))
+        console.print(summary_table(result, until, read_story(log)))
     return result
 
 
@@ -453,7 +408,7 @@ def _loop(
     channel: OperatorChannel,
     until: float | None,
     pace: float | None,
-    display: _Progress,
+    display: ProgressLine,
     started: float,
     ticks: _TickCount,
 ) -> str:
@@ -494,7 +449,8 @@ def _loop(
             return "time_limit"
         world.step(period)
         wall = _hold_pace(world, pace, started)
-        display.update(world, host.active, wall, paused)
+        if display.due():
+            display.show(world.now, until, wall, paused, robot_statuses(world, host.active))
 
 
 def _paused(recorder: Recorder | None, said: list[OperatorCommand], paused: bool, now: float) -> bool:

@@ -55,6 +55,7 @@ from marsupial.api.ticks import LogRecord
 from marsupial.api.views import LinkState, LinkView, RobotState, RobotView
 
 from .arbitration import ANY_RESOURCE, Arbiter, Claimant, NodeSink, Stamp
+from .metrics import MetricSpec
 from .operator import OperatorLatch
 
 _STATUSES = frozenset(Status)
@@ -235,6 +236,8 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P]):
     uses_robot: ClassVar[bool] = True
     #: a condition's parameter set by the compact guard form (``Condition.primary``); ``None`` for skills
     primary: ClassVar[str | None] = None
+    #: the metrics it records (:mod:`marsupial.trees.metrics`), registered when the registry resolves it
+    metrics: ClassVar[tuple[MetricSpec, ...]] = ()
 
     @property
     def operator_commands(self) -> tuple[str, ...]:

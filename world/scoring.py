@@ -37,6 +37,19 @@ if TYPE_CHECKING:
     from .world import World
 
 TRACKING_PERIOD_S = 0.1  # s between tracking-error samples
+
+#: the referee's metrics as the metric registry declares them (``MetricSpec`` fields of
+#: :mod:`marsupial.trees.metrics`, kept as plain data: the world does not import the runtime)
+SCORES: tuple[dict[str, str], ...] = (
+    {"name": "tracking_error_x", "unit": "m", "aggregation": "mean_abs",
+     "meaning": "platform centre minus UAV position, forward in the UAV's heading frame (truth)"},
+    {"name": "tracking_error_y", "unit": "m", "aggregation": "mean_abs",
+     "meaning": "platform centre minus UAV position, leftward in the UAV's heading frame (truth)"},
+    {"name": "unintended_contacts", "unit": "count", "aggregation": "total",
+     "meaning": "touches of the flying UAV with the carrier other than on Part A (truth)"},
+    {"name": "rim_contacts", "unit": "count", "aggregation": "total",
+     "meaning": "touches of the MMS's arm, launcher or held MAV with the aperture structure (truth)"},
+)
 PART_A_LINK = "part_a"
 
 

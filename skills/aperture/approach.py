@@ -66,6 +66,7 @@ from pydantic import Field
 
 from marsupial.api.capabilities import HasArmModel, HasBase
 from marsupial.geometry import rotation_matrix
+from marsupial.trees.milestones import milestone
 from marsupial.trees.phases import Phased, Transition, go, phase_event
 from marsupial.trees.skill import NodeParams, Skill
 
@@ -216,6 +217,7 @@ class ApproachAperture(Phased, Skill["ApproachAperture.Params"]):
             phase_event(self, "reached", pose=[round(float(x), 3) for x in (*estimate.position[:2], estimate.yaw)],
                         error_m=round(distance, 3), yaw_error=round(yaw_error, 3),
                         q=[round(float(x), 3) for x in self.robot.joint_positions()])
+            milestone(self, "reached the placement", detail=f"{distance:.2f} m off (estimate)")
             self.placed_at = self.now
             if p.relocalize:
                 self.feedback_message = "at the placement: relocalising against M"

@@ -37,6 +37,7 @@ import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
+from marsupial.trees.milestones import milestone
 from marsupial.trees.phases import Phased, Transition, go
 
 from .insert import INSERTION, ArmSkill, ArmSkillParams, Insertion
@@ -127,6 +128,7 @@ class LaunchScout(Phased, ArmSkill):
         position, _ = held_mav_pose(self.robot)
         self.released_at = position
         self.since = self.now
+        milestone(self, "launched", robot=self.params.scout, detail=f"through the aperture by {self.robot_name}")
         return go(self.Phase.CLEAR, event="launched", scout=self.params.scout,
                   position=[round(float(x), 3) for x in position])
 

@@ -32,6 +32,7 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.api.capabilities import HasArmModel
+from marsupial.trees.milestones import milestone
 from marsupial.trees.phases import phase_event
 from marsupial.trees.skill import NodeParams, Skill
 
@@ -158,5 +159,7 @@ class ApertureScan(Skill["ApertureScan.Params"]):
         best = ranked[0]
         self.feedback_message = (f"{len(ranked)} apertures ranked; best L_a {best.score:.2f} at "
                                  f"({', '.join(f'{x:.2f}' for x in best.m_A)})")
+        milestone(self, f"found {len(ranked)} aperture{'s' if len(ranked) > 1 else ''}",
+                  detail=f"best belief L_a {best.score:.2f}")
         return Status.SUCCESS
 

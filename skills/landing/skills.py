@@ -42,6 +42,8 @@ from py_trees.common import Status
 from pydantic import Field, model_validator
 
 from marsupial.api.capabilities import HasBase, HasPlatform, Rotorcraft
+from marsupial.trees.metrics import MetricSpec
+from marsupial.trees.milestones import milestone
 from marsupial.trees.skill import NodeParams, Skill, TeamMember
 
 from .touchdown import TouchdownParams, TouchdownTest
@@ -183,6 +185,7 @@ class Takeoff(FlightSkill[ClimbParams]):
         if module.tracking_start is None:
             module.tracking_start = self.now
         module.set_state("tracking", self, "nominal height reached")
+        milestone(self, "took off", detail="tracking the platform")
         return Status.SUCCESS
 
 
@@ -249,6 +252,11 @@ class Land(FlightSkill["Land.Params"]):
     descent.
     """
 
+    metrics: ClassVar[tuple[MetricSpec, ...]] = (
+        MetricSpec("landed", "flag", "the UAV landed on the moving platform", "count"),
+        MetricSpec("ground_landing", "flag", "the UAV came down on the ground, not on the platform", "count"),
+    )
+
     class Params(FlightParams):
         descent_speed: float = Field(0.3, gt=0.0)  # 0.3 m/s while the sonar reads > 0.7 m, §3.3.1
         """Descent speed (m/s) above ``final_height``, §3.3.1."""
@@ -293,10 +301,12 @@ class Land(FlightSkill["Land.Params"]):
         if not on_platform:
             self.context.metric("ground_landing", 1.0, robot=name)
             self.feedback_message = f"down but the IMU feels no motion ({ride}): landed on the ground"
+            milestone(self, "came down on the ground", detail="not on the platform")
             return Status.FAILURE
         self.context.metric("landed", 1.0, robot=name)
         self.module.set_state("landed", self, f"sonar below {self.params.landed_range} m, IMU {ride}")
         self.feedback_message = f"landed on the moving platform (IMU {ride})"
+        milestone(self, "landed", detail="on the moving platform")
         return Status.SUCCESS
 
     def finish(self, status: Status) -> None:
@@ -311,6 +321,10 @@ class Relocalize(FlightSkill["Relocalize.Params"]):
     the UAV hovers and keeps looking, until the platform comes into view or
     the mission's time limit ends the run.
     """
+
+    metrics: ClassVar[tuple[MetricSpec, ...]] = (
+        MetricSpec("relocalizations", "count", "re-localisation searches started so far", "total"),
+    )
 
     class Params(ClimbParams):
         max_height: float = Field(5.5, gt=0.0)
@@ -343,6 +357,7 @@ class Relocalize(FlightSkill["Relocalize.Params"]):
             return Status.RUNNING
         module.end_relocalization()
         self.feedback_message = "platform found, back at the nominal height"
+        milestone(self, "found the platform again")
         return Status.SUCCESS
 
 

@@ -36,6 +36,8 @@ from py_trees.common import Status
 from pydantic import Field, model_validator
 
 from marsupial.api.capabilities import Rotorcraft
+from marsupial.trees.metrics import MetricSpec
+from marsupial.trees.milestones import milestone
 from marsupial.trees.phases import phase_event
 from marsupial.trees.skill import Condition, NodeParams, Skill, TeamMember
 
@@ -78,6 +80,13 @@ class ObjectSighting:
 
 class Scout(Skill["Scout.Params"]):
     """Visually-servoed exploration of a micro-scout guided by the carrier, until an object of interest is found."""
+
+    metrics: ClassVar[tuple[MetricSpec, ...]] = (
+        MetricSpec("scout_frames_sent", "count", "video frames the scout sent over the relay", "total"),
+        MetricSpec("scout_frames_received", "count", "relayed video frames the carrier received", "total"),
+        MetricSpec("scout_frames_lost", "count", "relayed video frames lost on the way", "total"),
+        MetricSpec("scout_time_to_find", "s", "time from the scout's start to its sighting of the object", "each"),
+    )
 
     class Params(NodeParams):
         carrier: Annotated[str, TeamMember()] = "mms"
@@ -256,6 +265,7 @@ class Scout(Skill["Scout.Params"]):
                     area_px=detection.area_px, frame_stamp=round(frame.stamp, 3),
                     position=[round(c, 3) for c in sighting.position])
         self.context.metric("scout_time_to_find", self.now - self.started, robot=self.robot_name)
+        milestone(self, f"found {detection.object_class}", detail=f"{self.now - self.started:.1f} s after its start")
         self.feedback_message = f"{detection.object_class} found at box {detection.box} ({detection.area_px} px)"
         return Status.SUCCESS
 

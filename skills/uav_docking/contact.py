@@ -77,6 +77,8 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.api.capabilities import Rotorcraft
+from marsupial.trees.metrics import MetricSpec
+from marsupial.trees.milestones import milestone
 from marsupial.trees.phases import Phased, Transition, go, phase_event
 from marsupial.trees.skill import Condition, NodeParams, Skill
 
@@ -125,6 +127,13 @@ class Contact(Phased, Skill["Contact.Params"]):
 
     Then magnet and levers lock it.
     """
+
+    metrics: ClassVar[tuple[MetricSpec, ...]] = (
+        MetricSpec("contact_t", "s", "contact clock t_c of eq. (15) during the approach"),
+        MetricSpec("contact_z_C", "m", "height z_C of Part A in M during the approach, eq. (15)"),
+        MetricSpec("contact_time", "s", "time from the start of the approach to the lock", "each"),
+        MetricSpec("docking_time", "s", "time from the start of tracking to the lock on Part A", "each"),
+    )
 
     class Params(NodeParams):
         carrier: CarrierName = "carrier"
@@ -432,6 +441,8 @@ class Contact(Phased, Skill["Contact.Params"]):
             self.write(f"{self.params.carrier}/{PART_B_YAW}", yaw)
             fields["part_b_yaw"] = round(yaw, 3)
         phase_event(self, "locked", **fields)
+        took = f"tracking → lock {fields['docking_time']:.1f} s" if "docking_time" in fields else ""
+        milestone(self, "docked", detail=f"on {self.params.carrier}" + (f", {took}" if took else ""))
         self.feedback_message = f"{self.robot.name} locked on Part A, motors off"
         return Status.SUCCESS
 

@@ -69,7 +69,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import Annotated
+from typing import Annotated, ClassVar
 
 import numpy as np
 from py_trees.common import Status
@@ -78,6 +78,8 @@ from pydantic import Field
 from marsupial.api.capabilities import HasBase, Rotorcraft
 from marsupial.api.errors import UnknownNameError
 from marsupial.sensing import EstimateHistory, in_nav_frame, sensor_mount
+from marsupial.trees.metrics import MetricSpec
+from marsupial.trees.milestones import milestone
 from marsupial.trees.phases import Phased, Transition, go, phase_event
 from marsupial.trees.skill import NodeParams, Skill, TeamMember
 
@@ -129,6 +131,11 @@ class Explore(Phased, Skill["Explore.Params"]):
 
     The UAV stops every D_e for a yaw sweep.
     """
+
+    metrics: ClassVar[tuple[MetricSpec, ...]] = (
+        MetricSpec("coverage", "fraction", "share of the plan's target cells the UAV's camera has seen"),
+        MetricSpec("target_found", "flag", "the UAV's camera found the target", "count"),
+    )
 
     class Params(NodeParams):
         carrier: Annotated[str, TeamMember(HasBase)] = "carrier"
@@ -496,3 +503,4 @@ class Explore(Phased, Skill["Explore.Params"]):
             pixels=blob.area,
         )
         self.context.metric("target_found", 1.0, robot=self.robot_name)
+        milestone(self, f"found {p.target}", detail=f"at ({point[0]:.1f}, {point[1]:.1f}) m")

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from py_trees.common import Status
@@ -36,6 +36,7 @@ from pydantic import Field
 from marsupial.api.capabilities import Rotorcraft
 from marsupial.api.readings import StateEstimate
 from marsupial.geometry import rot_z, rotation_matrix, transform
+from marsupial.trees.metrics import MetricSpec
 from marsupial.trees.skill import NodeParams, Skill
 
 from .observer import EyeInHandObserver
@@ -212,6 +213,10 @@ class RelativeHold(Skill["RelativeHold.Params"]):
 
     The hold acts on the camera-anchored estimate of P_Q^M.
     """
+
+    metrics: ClassVar[tuple[MetricSpec, ...]] = (
+        MetricSpec("hold_error", "m", "distance of the UAV from its hold pose in M (estimate)", "max"),
+    )
 
     class Params(NodeParams):
         carrier: CarrierName = "carrier"

@@ -34,6 +34,7 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.api.capabilities import Carrier, Rotorcraft
+from marsupial.trees.milestones import milestone
 from marsupial.trees.phases import Phased, Transition, go, phase_event
 from marsupial.trees.skill import NodeParams, Skill, TeamMember
 
@@ -81,6 +82,7 @@ class Store(Skill["Store.Params"]):
         self.write(f"{self.robot_name}/{UAV_STORED}", True)
         self.write(f"{self.robot_name}/{DOCKING_FLAG}", False)
         phase_event(self, "stored", uav=uav, charging=device.charging)
+        milestone(self, "stored", robot=uav, detail=f"on {self.robot_name}" + (", charging" if device.charging else ""))
         self.feedback_message = f"{uav} stored, charging: {device.charging}"
         return Status.SUCCESS
 
@@ -208,6 +210,7 @@ class Deploy(Phased, Skill["Deploy.Params"]):
         if error > 0.05:
             return Status.RUNNING
         phase_event(self, "clear", height_above_release=self.params.clearance)
+        milestone(self, "deployed", detail=f"from {self.params.carrier}")
         return Status.SUCCESS
 
     def finish(self, status: Status) -> None:

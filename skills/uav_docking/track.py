@@ -55,12 +55,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import ClassVar
 
 import numpy as np
 from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.api.capabilities import Rotorcraft
+from marsupial.trees.metrics import MetricSpec
 from marsupial.trees.phases import phase_event
 from marsupial.trees.skill import NodeParams, Skill
 
@@ -147,6 +149,14 @@ def sonar_cone_zones(zones: ZoneMap, T_M_S: np.ndarray, half_angle: float, lengt
 
 class Track(Skill["Track.Params"]):
     """Track the UAV with the arm's Motion Engine from the eye-in-hand camera while the UAV holds its pose in M."""
+
+    metrics: ClassVar[tuple[MetricSpec, ...]] = (
+        MetricSpec("part_a_M", "m", "Part A's position in M, per axis (arm's forward kinematics)"),
+        MetricSpec("uav_M_estimate", "m", "the UAV's position in M, per axis, as the carrier estimates it"),
+        MetricSpec("part_b_M", "m", "Part B's position in M, per axis, from the camera"),
+        MetricSpec("camera_offset", "m", "distance of the tag plate's centre from the camera's axis", "mean_abs"),
+        MetricSpec("docking_gap_estimate", "m", "distance from Part A to Part B as the camera estimates it"),
+    )
 
     class Params(NodeParams):
         carrier: CarrierName = "carrier"

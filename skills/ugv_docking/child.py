@@ -30,12 +30,13 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.api.capabilities import HasBase, HasLift
+from marsupial.trees.milestones import milestone
 from marsupial.trees.skill import NodeParams, P, Skill, TeamMember
 
 from .conditions import LOST_FRAMES
 from .criterion import load_criterion_list, robot_tolerances
 from .steering import MatchGains, centring_rate, match_command, target_column
-from .vision import PLATFORM_TOPIC, VIEW_KEY, BenchmarkView, PlatformReport, child_view
+from .vision import FEATURE_METRICS, PLATFORM_TOPIC, VIEW_KEY, BenchmarkView, PlatformReport, child_view
 
 
 class _ChildSkill(Skill[P]):
@@ -46,6 +47,7 @@ class _ChildSkill(Skill[P]):
     claims = ("base",)
     reads = (f"{{robot}}/{VIEW_KEY}",)
     writes = (f"{{robot}}/{VIEW_KEY}",)
+    metrics = FEATURE_METRICS
 
     def view(self) -> BenchmarkView:
         """The child's benchmark view, updated to the newest camera frame."""
@@ -193,6 +195,7 @@ class ChildDirect(_ChildSkill["ChildDirect.Params"]):
         if self.boarded_at is not None and float(np.linalg.norm(position - self.boarded_at)) >= p.past_switch:
             self.robot.stop()
             self.feedback_message = f"on {p.mother}'s platform"
+            milestone(self, "docked", detail=f"on {p.mother}'s platform")
             return Status.SUCCESS
         driven = float(np.linalg.norm(position - self.p0))
         if driven > p.max_distance:

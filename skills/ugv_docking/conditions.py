@@ -29,7 +29,7 @@ from marsupial.trees.skill import Condition, NodeParams, P, TeamMember
 
 from .criterion import CriterionList, load_criterion_list, matched, robot_tolerances, within_criterion
 from .features import BenchmarkFeatures
-from .vision import VIEW_KEY, child_view, received_features
+from .vision import FEATURE_METRICS, VIEW_KEY, child_view, received_features
 
 #: a parameter naming the child whose features a mother's condition judges (unset: the robot's own camera)
 ChildName = Annotated[str, TeamMember(HasBase)] | None
@@ -42,6 +42,7 @@ class _FeatureCondition(Condition[P]):
     robot_kinds = (HasBase,)
     reads = (f"{{robot}}/{VIEW_KEY}",)
     writes = (f"{{robot}}/{VIEW_KEY}",)
+    metrics = FEATURE_METRICS
 
     @classmethod
     def sensors_read(cls, params: P, robot: str | None) -> tuple[tuple[str, str], ...]:

@@ -10,6 +10,8 @@
   backwards a given distance on its odometry (the station's entrance is its only opening).
 
 Each reports the platform over the team link (:class:`~.vision.PlatformReport`).
+``lift`` writes the child it lifted (its ``child`` parameter: the load switch does not tell which) to ``{robot}/lifted``
+(``carry`` reads them for its milestone, ``release`` clears them).
 Heights and distances in m, speeds m/s.
 """
 
@@ -20,6 +22,7 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.api.capabilities import HasBase, HasLift
+from marsupial.trees.milestones import milestone
 from marsupial.trees.skill import NodeParams, Skill
 
 from ..generic import DriveTo
@@ -27,17 +30,21 @@ from .mother import ChildMember
 from .vision import report_platform
 
 LIFT_TOLERANCE = 0.005  # m: the lift encoder this close to its target counts as arrived
+LIFTED = "{robot}/lifted"  # blackboard: the children the platform lifted (team member names)
 
 
 class Lift(Skill["Lift.Params"]):
     """Raise the platform with the child on it to the storing capsule; it decides on the platform's load switch."""
 
     class Params(NodeParams):
+        child: ChildMember = "child"
+        """The child the mission docks (the load switch tells that a child is on the plate, not which)."""
         tolerance: float = Field(LIFT_TOLERANCE, gt=0.0)
         """Lift-encoder error (m) at which the platform is at the capsule."""
 
     robot_kinds = (HasLift,)
     claims = ("lift",)
+    writes = (LIFTED,)
 
     def start(self) -> None:
         self.loaded = bool(self.robot.platform_occupied)  # the load switch: a child stands wholly on the plate
@@ -50,14 +57,19 @@ class Lift(Skill["Lift.Params"]):
             self.feedback_message = "nothing on the platform to lift (load switch open)"
             return Status.FAILURE
         height, travel = float(self.robot.platform_height()), float(self.robot.lift_travel)
-        self.feedback_message = f"lifting the child: {height:.3f} of {travel:.2f} m"
-        return Status.SUCCESS if height >= travel - self.params.tolerance else Status.RUNNING
+        self.feedback_message = f"lifting {self.params.child}: {height:.3f} of {travel:.2f} m"
+        if height < travel - self.params.tolerance:
+            return Status.RUNNING
+        self.write(LIFTED.format(robot=self.robot_name), [self.params.child])
+        milestone(self, "lifted", robot=self.params.child, detail=f"into {self.robot_name}'s capsule")
+        return Status.SUCCESS
 
 
 class Carry(DriveTo):
     """Drive the mother to a point with the child stored in its capsule (``drive_to`` on the mother's estimate)."""
 
     robot_kinds = (HasBase, HasLift)
+    reads = (LIFTED,)
 
     def start(self) -> None:
         travel = float(self.robot.lift_travel)
@@ -67,7 +79,12 @@ class Carry(DriveTo):
         if not self.stored:
             self.feedback_message = "no child stored: the platform is not up with a child on it"
             return Status.FAILURE
-        return super().step()
+        status = super().step()
+        if status == Status.SUCCESS:
+            where = f"to ({self.params.target[0]:.2f}, {self.params.target[1]:.2f}) m"
+            for child in self.read(LIFTED.format(robot=self.robot_name), ()):
+                milestone(self, "carried", robot=child, detail=f"by {self.robot_name} {where}")
+        return status
 
 
 class Release(Skill["Release.Params"]):
@@ -85,6 +102,7 @@ class Release(Skill["Release.Params"]):
 
     robot_kinds = (HasLift,)
     claims = ("lift", "{child}/base")
+    writes = (LIFTED,)
 
     def start(self) -> None:
         self.robot.lower_platform()
@@ -104,6 +122,8 @@ class Release(Skill["Release.Params"]):
         if backed >= p.distance:
             self.child.stop()
             self.feedback_message = f"{p.child} out, {backed:.2f} m back"
+            self.write(LIFTED.format(robot=self.robot_name), [])
+            milestone(self, "released", robot=p.child, detail=f"backed out of {self.robot_name}'s station")
             return Status.SUCCESS
         self.child.drive(-p.speed, 0.0)
         self.feedback_message = f"{p.child} backing out: {backed:.2f} m"

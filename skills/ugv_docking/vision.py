@@ -22,6 +22,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from marsupial.trees.metrics import MetricSpec
+
 from .features import BenchmarkFeatures, FeatureParams, extract_features
 
 if TYPE_CHECKING:
@@ -114,6 +116,14 @@ class BenchmarkView:
         immediately"); C4 ends that after ``frames`` frames.
         """
         return self.last if self.lost_frames < frames else None
+
+
+#: the metrics :func:`child_view` records (declared by the nodes that use it)
+FEATURE_METRICS = (
+    MetricSpec("ugv_u_star", "1", "benchmark centre u_h / W across the child's image (Fig. 11b)"),
+    MetricSpec("ugv_s_star", "1", "benchmark width s_u / W in the child's image (Fig. 11b)"),
+    MetricSpec("ugv_k_h", "1", "slope k_h of the benchmark's top edge in the child's image (Fig. 11b)"),
+)
 
 
 def child_view(node: MissionNode[Any]) -> BenchmarkView:

@@ -108,10 +108,25 @@ def _describe(tp: Any) -> str:
         return "a list"
     if origin is dict:
         return "a mapping"
+    if origin is tuple:
+        return _describe_tuple(get_args(tp))
     if isinstance(tp, type) and issubclass(tp, BaseModel):
         required = [n for n, f in tp.model_fields.items() if f.is_required()]
         return f"a mapping with {', '.join(required)}" if required else "a mapping"
     return {int: "an integer", float: "a number", str: "a string", bool: "true or false"}.get(tp, "a value")
+
+
+_PLURALS = {int: "integers", float: "numbers", str: "strings", bool: "booleans"}
+
+
+def _describe_tuple(args: tuple[Any, ...]) -> str:
+    """A tuple type in words: ``"a list of 3 numbers"``, ``"a list of numbers"`` (``tuple[float, ...]``)."""
+    if len(args) == 2 and args[1] is Ellipsis:
+        return f"a list of {_PLURALS.get(unwrap(args[0]), 'values')}"
+    kinds = {unwrap(a) for a in args}
+    if len(kinds) == 1:
+        return f"a list of {len(args)} {_PLURALS.get(kinds.pop(), 'values')}"
+    return f"a list of {len(args)} values ({', '.join(_describe(a) for a in args)})"
 
 
 @dataclass
@@ -159,6 +174,9 @@ def walk_location(loc: tuple[Any, ...], root: Any, data: Any) -> _LocWalk:
                 continue
         elif origin is dict:
             tp = get_args(tp)[1]
+        elif origin is tuple and isinstance(item, int):
+            args = get_args(tp)
+            tp = args[0] if len(args) == 2 and args[1] is Ellipsis else args[item] if item < len(args) else Any
         else:
             tp = Any
         path.append(item)
@@ -217,6 +235,10 @@ def _convert(err: Mapping[str, Any], root: Any, data: Any) -> tuple[tuple[Any, .
         key = walk.path[-1]
         known = list(walk.model.model_fields) if walk.model else []
         return walk.path, f"unknown key '{key}'", one_of(known), suggest(key, known)
+    if kind == "missing" and walk.path and isinstance(walk.path[-1], int):  # a list too short for its tuple
+        owner = walk_location(tuple(err["loc"])[:-1], root, data)
+        given = len(owner.value) if isinstance(owner.value, (list, tuple)) else 0
+        return owner.path, f"{given} item{'s' if given != 1 else ''} given", _describe(owner.annotation), None
     if kind == "missing":
         return walk.path, f"missing required key '{walk.path[-1]}'", _describe(walk.annotation), None
     if "expected" in ctx and kind not in _EXPECTATIONS:  # our own checks (PydanticCustomError)

@@ -3,8 +3,9 @@
 Reads ``summary.json`` and ``trials.json``; shows the success rate with its
 Wilson 95 % interval (overall and per ``--vary`` combination), the outcome
 breakdown, histograms of simulated times and of each metric's last value over
-the trials, and a table of trials linking to each kept log's run report
-(written to ``reports/`` next to the campaign page).
+the trials (titled with its meaning and unit from the metric registry), and a
+table of trials linking to each kept log's run report (written to
+``reports/`` next to the campaign page).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import os
 from pathlib import Path
 from typing import Any
 
+from .. import metrics
 from ..campaign import summarize, wilson_interval
 from ..replay import LogError
 from . import plots
@@ -73,7 +75,7 @@ def campaign_context(folder: Path, page: Path, reports: dict[int, Path]) -> dict
         "ci": (low, high),
         "groups": groups,
         "outcome_svg": plots.outcome_svg(overall["outcomes"]) if records else None,
-        "histograms": plots.histograms(values),
+        "histograms": plots.histograms(values, {name: metrics.spec(name) for name in metric_names}),
         "trials": trials,
         "folder": folder.name,  # not the whole path: pages get published
     }

@@ -20,8 +20,12 @@ from typing import Any
 import numpy as np
 import yaml
 
+from .. import metrics
+from ..metrics import MetricSpec
+from ..milestones import story, tell
 from ..recorder import IMAGE_SCHEMA, describe_event
 from ..replay import RunLog, TreeSnapshot
+from ..summary import OUTCOME_MEANINGS
 from . import plots
 
 __all__ = ["IMAGES_PER_CAMERA", "MAX_EVENT_ROWS", "phase_rows", "run_context", "tree_rows"]
@@ -47,29 +51,64 @@ def _depths(xml: str) -> dict[int, int]:
     return depths
 
 
-def tree_rows(snapshots: list[TreeSnapshot], end: float) -> list[dict[str, Any]]:
-    """One row per tree node (uid order): ``{"uid", "name", "depth", "intervals": [(start, end, status)]}``.
+def _guards(xml: str) -> tuple[set[int], dict[int, int]]:
+    """(uids of the condition nodes, {uid of a node whose first child is a condition: that condition's uid}).
 
-    A node's interval runs from the snapshot where its status became RUNNING,
-    SUCCESS or FAILURE to the one where it changed again (or ``end``, s); IDLE
-    spans are left out.
+    Conditions are the nodes the XML's ``TreeNodesModel`` declares as ``Condition``; a guarded branch
+    (``when: … do: …``) is a sequence whose first child is its guard.
+    """
+    root = ET.fromstring(xml)
+    kinds = {node.get("ID") for model in root.iter("TreeNodesModel") for node in model if node.tag == "Condition"}
+    conditions = {int(e.get("_uid", 0)) for e in root.iter() if e.tag in kinds and e.get("_uid") is not None}
+    guarded = {}
+    for element in root.iter():
+        children = [child for child in element if child.get("_uid") is not None]
+        if element.get("_uid") is not None and children and int(children[0].get("_uid", 0)) in conditions:
+            guarded[int(element.get("_uid", 0))] = int(children[0].get("_uid", 0))
+    return conditions, guarded
+
+
+def _state(uid: int, snapshot: TreeSnapshot, conditions: set[int], guarded: dict[int, int]) -> str:
+    """How the timeline shows node ``uid`` in ``snapshot``: its status, or HOLDS / NOT_HOLDING for a guard.
+
+    A condition that does not hold, and a guarded branch that failed only because its guard did not hold,
+    are NOT_HOLDING (drawn neutral): nothing went wrong.
+    """
+    status = snapshot.statuses.get(uid, "IDLE")
+    if uid in conditions:
+        return {"SUCCESS": "HOLDS", "FAILURE": "NOT_HOLDING"}.get(status, status)
+    if status == "FAILURE" and uid in guarded and snapshot.statuses.get(guarded[uid]) == "FAILURE":
+        return "NOT_HOLDING"
+    return status
+
+
+def tree_rows(snapshots: list[TreeSnapshot], end: float) -> list[dict[str, Any]]:
+    """One row per tree node (uid order): ``{"uid", "name", "depth", "guard", "intervals": [(start, end, state)]}``.
+
+    A node's interval runs from the snapshot where its state became RUNNING,
+    SUCCESS, FAILURE, HOLDS or NOT_HOLDING (guards, :func:`_state`) to the one
+    where it changed again (or ``end``, s); IDLE spans are left out. A state
+    reached at the last tick (the root's final SUCCESS) is an interval of
+    length 0 at ``end``. ``guard``: whether the node is a condition.
     """
     if not snapshots:
         return []
     depths = _depths(snapshots[0].xml)
+    conditions, guarded = _guards(snapshots[0].xml)
     names = snapshots[-1].names
     rows = []
     for uid in sorted(names):
         intervals, current, since = [], "IDLE", 0.0
         for snapshot in snapshots:
-            status = snapshot.statuses.get(uid, "IDLE")
-            if status != current:
+            state = _state(uid, snapshot, conditions, guarded)
+            if state != current:
                 if current != "IDLE":
                     intervals.append((since, snapshot.t, current))
-                current, since = status, snapshot.t
+                current, since = state, snapshot.t
         if current != "IDLE":
             intervals.append((since, max(end, since), current))
-        rows.append({"uid": uid, "name": names[uid], "depth": depths.get(uid, 0), "intervals": intervals})
+        rows.append({"uid": uid, "name": names[uid], "depth": depths.get(uid, 0), "guard": uid in conditions,
+                     "intervals": intervals})
     return rows
 
 
@@ -102,24 +141,25 @@ def _description(mission_text: str) -> str:
     return " ".join(str(data.get("description", "")).split()) if isinstance(data, dict) else ""
 
 
-def _metrics(log: RunLog) -> tuple[dict[str, dict[str, tuple[np.ndarray, np.ndarray]]], list[dict[str, Any]]]:
-    """(series of the metrics with two samples or more, by name then label text; last value of every metric)."""
-    grouped: dict[str, dict[str, list[tuple[float, float]]]] = {}
-    for m in log.metrics:
-        labels = ", ".join(f"{k}={v}" for k, v in sorted(m["labels"].items()))
-        value = np.nan if m["value"] is None else float(m["value"])
-        grouped.setdefault(m["name"], {}).setdefault(labels, []).append((m["t"], value))
+def _metrics(log: RunLog) -> tuple[dict[str, dict[str, tuple[np.ndarray, np.ndarray]]], list[dict[str, Any]],
+                                   dict[str, MetricSpec | None]]:
+    """(series of the metrics with two samples or more, by name then label text; one row per metric and label
+    set with the value its aggregation gives, unit and meaning; the declarations, by name)."""
+    grouped = metrics.group_samples(log.metrics)
     order = sorted(grouped, key=lambda name: (not name.startswith("battery"), name))
-    series, finals = {}, []
+    specs = {name: metrics.spec(name) for name in order}
+    series, rows = {}, []
     for name in order:
-        lines = grouped[name]
+        lines, spec = grouped[name], specs[name]
         for labels, samples in lines.items():
-            finals.append({"name": name, "labels": labels, "t": samples[-1][0], "value": samples[-1][1],
-                           "samples": len(samples)})
+            rows.append({"name": name, "labels": labels, "value": metrics.summarize(spec, [v for _, v in samples]),
+                         "meaning": spec.meaning if spec else "not declared in the metric registry",
+                         "aggregation": spec.aggregation if spec else "", "t": samples[-1][0],
+                         "samples": len(samples)})
         if max(len(samples) for samples in lines.values()) >= 2:
             series[name] = {labels: (np.array([t for t, _ in s]), np.array([v for _, v in s]))
                             for labels, s in lines.items()}
-    return series, finals
+    return series, rows, specs
 
 
 def _images(log: RunLog) -> list[dict[str, Any]]:
@@ -170,7 +210,7 @@ def run_context(log: RunLog, links: Mapping[str, str] | None = None) -> dict[str
         row_of.setdefault(row["name"], index)
     preemptions = [{"t": e["t"], "row": row_of.get(e["preempted"]), "event": e} for e in log.events_of("preemption")]
     operator = [{"t": e["t"], "command": e["command"]} for e in log.events_of("operator")]
-    series, finals = _metrics(log)
+    series, metric_rows, specs = _metrics(log)
     phases = phase_rows(log.events, end)
     run_end: dict[str, Any] = next((e for e in reversed(log.events) if e["kind"] == "run_end"), {})
     errors = [e for e in log.events if e["kind"] == "error"]
@@ -178,7 +218,10 @@ def run_context(log: RunLog, links: Mapping[str, str] | None = None) -> dict[str
     for robot, tracks in paths.items():
         if "estimate" in tracks and len(tracks["estimate"]) == len(tracks["truth"]) and len(tracks["truth"]):
             gap = np.linalg.norm(tracks["estimate"] - tracks["truth"], axis=1)
-            estimate_errors[robot] = {"final": float(gap[-1]), "max": float(gap.max())}
+            worst = int(np.argmax(gap))
+            estimate_errors[robot] = {"final": float(gap[-1]), "max": float(gap[worst]),
+                                      "max_t": float(log.poses(robot)[0][worst])}
+    told = story(log.events)
     return {
         "title": f"{meta.get('mission_name', '?')} — marsupial run report",
         "mission": meta.get("mission_name", "?"),
@@ -194,19 +237,22 @@ def run_context(log: RunLog, links: Mapping[str, str] | None = None) -> dict[str
         "log_name": Path(log.path).name,
         "errors": errors,
         "robots": robots,
+        "outcome_meaning": OUTCOME_MEANINGS.get(log.outcome or "", ""),
+        "milestones": {robot: tell(items, limit=len(items)) for robot, items in told.items()},
         "estimate_errors": estimate_errors,
         "map_svg": plots.map_svg(scene, paths),
-        "timeline_svg": plots.timeline_svg(rows, end, preemptions, operator) if rows else None,
+        "timeline_svg": plots.timeline_svg(rows, end, preemptions, operator, log.outcome) if rows else None,
         "phases_svg": plots.phases_svg(phases, end) if phases else None,
         "nodes": rows,
         "preemptions": preemptions,
         "operator": log.events_of("operator"),
         "events": _event_rows(log),
         "events_left_out": max(0, len(log.events) - MAX_EVENT_ROWS),
-        "metric_svgs": plots.metric_svgs(series),
-        "final_metrics": finals,
+        "metric_svgs": plots.metric_svgs(series, end, specs),
+        "metric_rows": metric_rows,
         "images": _images(log),
         "mission_text": meta.get("mission", ""),
         "links": dict(links or {}),
         "status_colours": plots.STATUS_COLOURS,
+        "status_labels": plots.STATUS_LABELS,
     }

@@ -14,6 +14,7 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.skills.generic import Hover
+from marsupial.trees.metrics import MetricSpec
 from marsupial.trees.skill import NodeParams
 
 
@@ -39,6 +40,7 @@ class MeteredHover(Hover):
     writes = ("{robot}/hover_drift",)
     sensors = ("sonar",)  # delivered while the skill runs; reading an undeclared sensor raises an error
     # robot_kinds (Rotorcraft) and claims ("rotors") are Hover's
+    metrics = (MetricSpec("hover_drift", "m", "horizontal drift from where the hover began (estimate)", "max"),)
 
     def start(self) -> None:
         super().start()
