@@ -22,7 +22,8 @@ if TYPE_CHECKING:
     import numpy as np
 
     from .kinematics import ArmKinematics
-    from .readings import BatteryStatus
+    from .model import RobotModel
+    from .readings import BatteryStatus, StateEstimate
     from .views import DockingView, SensorView
 
 #: the resources of the robots: wheeled base, arm joints, rotors (flight controller and its estimator),
@@ -31,7 +32,43 @@ RESOURCES: tuple[str, ...] = ("base", "arm", "rotors", "docking", "gripper", "li
 
 
 @runtime_checkable
-class HasBattery(Protocol):
+class Robot(Protocol):
+    """What every robot's view offers: its names, model, state estimate, sensors and safe stop.
+
+    Every capability below extends it, so a skill typed by its capability
+    (``Skill["X.Params", Rotorcraft]``) reads these too.
+    """
+
+    @property
+    def name(self) -> str:
+        """The robot's team name."""
+
+    @property
+    def kind(self) -> str:
+        """The robot's kind (``"bebop2"`` …)."""
+
+    @property
+    def model(self) -> RobotModel:
+        """What the robot's designers wrote down: links, sensors, limits."""
+
+    def estimate(self) -> StateEstimate:
+        """The onboard state estimate at this tick (navigation frame)."""
+
+    def sensor(self, name: str) -> SensorView:
+        """One sensor: its newest sample and its static facts."""
+
+    def link_offset(self, link: str) -> tuple[np.ndarray, np.ndarray]:
+        """Position (m) and rotation of ``link`` in the base frame, from the URDF."""
+
+    def provides(self, capability: type) -> bool:
+        """Whether the robot has ``capability``."""
+
+    def safe_stop(self) -> None:
+        """Leave the resources the node claims on the robot safe."""
+
+
+@runtime_checkable
+class HasBattery(Robot, Protocol):
     """A robot with a battery monitor (state of charge, voltage, current)."""
 
     def battery(self) -> BatteryStatus | None:
@@ -39,7 +76,7 @@ class HasBattery(Protocol):
 
 
 @runtime_checkable
-class HasBase(Protocol):
+class HasBase(Robot, Protocol):
     """A wheeled base (resource ``base``): drive commands, wheel-encoder speed, drive limits."""
 
     def drive(self, v: float, omega: float) -> None:
@@ -59,7 +96,7 @@ class HasBase(Protocol):
 
 
 @runtime_checkable
-class HasLidar(Protocol):
+class HasLidar(Robot, Protocol):
     """A robot with a planar LiDAR (sensor ``lidar``)."""
 
     @property
@@ -110,7 +147,7 @@ class Rotorcraft(HasBattery, Protocol):
 
 
 @runtime_checkable
-class HasArm(Protocol):
+class HasArm(Robot, Protocol):
     """A robot arm (resource ``arm``): joint targets, hold, joint encoders."""
 
     def set_joint_targets(self, q: Any) -> None:
@@ -152,7 +189,7 @@ class Carrier(HasArm, HasBase, Protocol):
 
 
 @runtime_checkable
-class HasGripper(Protocol):
+class HasGripper(Robot, Protocol):
     """A gripper (resource ``gripper``): open, close, opening."""
 
     def open_gripper(self) -> None:
@@ -166,7 +203,7 @@ class HasGripper(Protocol):
 
 
 @runtime_checkable
-class HasScoutLauncher(Protocol):
+class HasScoutLauncher(Robot, Protocol):
     """Launching apparatuses with micro-scouts, held by the gripper (resource ``gripper``): the launch command."""
 
     def release_scout(self) -> None:
@@ -174,7 +211,7 @@ class HasScoutLauncher(Protocol):
 
 
 @runtime_checkable
-class HasLift(Protocol):
+class HasLift(Robot, Protocol):
     """A lifting platform (resource ``lift``): raise, lower, height, its load switch and travel."""
 
     def raise_platform(self) -> None:

@@ -49,7 +49,7 @@ class Wait(Skill["Wait.Params"]):
         return Status.SUCCESS if left <= 1e-9 else Status.RUNNING
 
 
-class Goto(Skill["Goto.Params"]):
+class Goto(Skill["Goto.Params", Rotorcraft]):
     """Fly a UAV to a point of its navigation frame (proportional velocity command on its estimate, speed-limited)."""
 
     class Params(NodeParams):
@@ -92,7 +92,7 @@ class Goto(Skill["Goto.Params"]):
             self.leave_safe()
 
 
-class Hover(Skill["Hover.Params"]):
+class Hover(Skill["Hover.Params", Rotorcraft]):
     """Hold a UAV in place for a number of simulated seconds, then succeed."""
 
     class Params(NodeParams):
@@ -112,7 +112,7 @@ class Hover(Skill["Hover.Params"]):
         return Status.SUCCESS if left <= 1e-9 else Status.RUNNING
 
 
-class DriveTo(Skill["DriveTo.Params"]):
+class DriveTo(Skill["DriveTo.Params", HasBase]):
     """Drive a ground robot to a point of the floor (turn towards it, then drive; unicycle law on its estimate)."""
 
     class Params(NodeParams):

@@ -42,14 +42,16 @@ import typing
 import zlib
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, ForwardRef, Generic, TypeVar, cast
+from typing import Any, ClassVar, ForwardRef, Generic, cast, overload
 
 import numpy as np
 import py_trees
 from py_trees.common import Access, Status
 from pydantic import BaseModel, ConfigDict, model_validator
+from typing_extensions import TypeVar
 
 from marsupial.api.errors import UnknownNameError
+from marsupial.api.keys import Key
 from marsupial.api.priors import PRIORS, BuildingPlan
 from marsupial.api.ticks import LogRecord
 from marsupial.api.views import LinkState, LinkView, RobotState, RobotView
@@ -191,13 +193,16 @@ class RunContext:
 
 
 P = TypeVar("P", bound=NodeParams)
+#: the robot a node acts on, as a capability protocol (``Rotorcraft``); unset: untyped
+R = TypeVar("R", default=Any)
+V = TypeVar("V")
 
 
 def _params_argument(cls: type) -> type[NodeParams] | None:
     """The parameter class ``cls`` names as its generic argument (``Skill[GotoParams]``, ``Skill["Goto.Params"]``)."""
     for base in cls.__dict__.get("__orig_bases__", ()):
         for arg in typing.get_args(base):
-            if isinstance(arg, TypeVar):
+            if isinstance(arg, typing.TypeVar):
                 return cast("type[NodeParams] | None", arg.__bound__)
             if isinstance(arg, (str, ForwardRef)):
                 text = arg if isinstance(arg, str) else arg.__forward_arg__
@@ -211,7 +216,7 @@ def _params_argument(cls: type) -> type[NodeParams] | None:
     return None
 
 
-class MissionNode(py_trees.behaviour.Behaviour, Generic[P]):
+class MissionNode(py_trees.behaviour.Behaviour, Generic[P, R]):
     """Base of skills and conditions: parameters, blackboard ports, the robot it acts on.
 
     Subclasses are built by the compiler as ``cls(name, params, context, robot)``.
@@ -222,8 +227,8 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P]):
     params: P
 
     #: blackboard keys read / written, formatted with ``robot`` and the parameters
-    reads: ClassVar[tuple[str, ...]] = ()
-    writes: ClassVar[tuple[str, ...]] = ()
+    reads: ClassVar[tuple[str | Key[Any], ...]] = ()
+    writes: ClassVar[tuple[str | Key[Any], ...]] = ()
     #: capabilities its robot must have (``None``: any robot); ignored when ``uses_robot`` is False
     robot_kinds: ClassVar[tuple[type, ...] | None] = None
     #: sensors it reads: ``"<sensor>"`` of its robot or ``"{param}/<sensor>"`` of a member (short names, formatted
@@ -279,9 +284,9 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P]):
 
     # --------------------------------------------------------- declarations
     @classmethod
-    def _format_keys(cls, keys: tuple[str, ...], params: P, robot: str | None) -> tuple[str, ...]:
+    def _format_keys(cls, keys: tuple[str | Key[Any], ...], params: P, robot: str | None) -> tuple[str, ...]:
         values = {**params.model_dump(), "robot": robot}
-        return tuple(key.format(**values) for key in keys)
+        return tuple(str(key).format(**values) for key in keys)
 
     @classmethod
     def read_keys(cls, params: P, robot: str | None) -> tuple[str, ...]:
@@ -355,11 +360,11 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P]):
         return self.context.now
 
     @property
-    def robot(self) -> Any:
+    def robot(self) -> R:
         """The view of the robot this node acts on (:mod:`marsupial.api.views`): its readings, model and commands."""
         if self.robot_name is None:
             raise RuntimeError(f"node '{self.name}' has no robot")
-        return self.member(self.robot_name)
+        return cast(R, self.member(self.robot_name))  # a view of the class the robot's kind names: it provides R
 
     def member(self, name: str) -> Any:
         """Team member ``name``'s view as this node sees it: this tick's readings, commands to claimed resources."""
@@ -382,19 +387,33 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P]):
         self.context.state(name)  # a clear error for an unknown member
         return LinkView(name, self.context.link, self._sink)
 
-    def read(self, key: str, default: Any = None) -> Any:
-        """Blackboard value of a declared read key, ``default`` while nothing wrote it."""
+    @overload
+    def read(self, key: Key[V], default: V | None = None) -> V | None: ...
+
+    @overload
+    def read(self, key: str, default: Any = None) -> Any: ...
+
+    def read(self, key: str | Key[Any], default: Any = None) -> Any:
+        """Blackboard value of a declared read key, ``default`` while nothing wrote it (typed for a :class:`Key`)."""
         try:
-            return self.blackboard.get(key)
+            return self.blackboard.get(str(key))
         except KeyError:
             return default
 
-    def write(self, key: str, value: Any) -> None:
-        """Set a declared write key on the blackboard."""
-        self.blackboard.set(key, value, overwrite=True)
+    @overload
+    def write(self, key: Key[V], value: V) -> None: ...
+
+    @overload
+    def write(self, key: str, value: Any) -> None: ...
+
+    def write(self, key: str | Key[Any], value: Any) -> None:
+        """Set a declared write key on the blackboard; a :class:`Key` refuses a value of another type."""
+        if isinstance(key, Key):
+            key.check(value)
+        self.blackboard.set(str(key), value, overwrite=True)
 
 
-class Skill(MissionNode[P]):
+class Skill(MissionNode[P, R]):
     """Base of skills: override :meth:`start`, :meth:`step` and, if needed, :meth:`finish`.
 
     ``self.robot`` sends arbitrated commands; :attr:`stopped_by` tells, after
@@ -437,7 +456,7 @@ class Skill(MissionNode[P]):
     def leave_safe(self) -> None:
         """Arbitrated safe stop of the resources the skill claims on its robot (a no-op for skills without a robot)."""
         if self.uses_robot and self.robot_name is not None:
-            self.robot.safe_stop()
+            self.member(self.robot_name).safe_stop()
 
     # ------------------------------------------------------ py_trees hooks
     def initialise(self) -> None:
@@ -468,7 +487,7 @@ class Skill(MissionNode[P]):
             )
 
 
-class Condition(MissionNode[P]):
+class Condition(MissionNode[P, R]):
     """Base of conditions: implement :meth:`check`; the node is SUCCESS when it holds, else FAILURE.
 
     ``primary`` names the parameter given as the value of the compact guard

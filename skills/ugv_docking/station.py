@@ -17,6 +17,8 @@ Heights and distances in m, speeds m/s.
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 from py_trees.common import Status
 from pydantic import Field
@@ -72,8 +74,9 @@ class Carry(DriveTo):
     reads = (LIFTED,)
 
     def start(self) -> None:
-        travel = float(self.robot.lift_travel)
-        self.stored = bool(self.robot.platform_occupied) and self.robot.platform_height() >= travel - LIFT_TOLERANCE
+        lift = cast(HasLift, self.robot)  # drive_to's robot is a HasBase; this one has the lift too (robot_kinds)
+        travel = float(lift.lift_travel)
+        self.stored = bool(lift.platform_occupied) and lift.platform_height() >= travel - LIFT_TOLERANCE
 
     def step(self) -> Status:
         if not self.stored:
