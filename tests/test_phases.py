@@ -59,12 +59,15 @@ class Pick(Phased, Skill):
 
 
 def _run(node: Skill, path, ticks: int) -> list[dict]:
-    """Tick ``node`` (at most ``ticks`` times, until it ends) with a recorder; the events of the log."""
+    """Tick ``node`` (at most ``ticks`` times, until it ends), its events recorded as a run records them; the log's."""
     py_trees.blackboard.Blackboard.clear()
     recorder = Recorder(path, {"mission_name": "phases"})
-    node.context = RunContext(recorder=recorder)
+    node.context = context = RunContext()
     for _ in range(ticks):
         node.tick_once()
+        for record in context.records:
+            recorder.log_event(0.0, record.name, **record.fields)
+        context.records.clear()
         if node.status != Status.RUNNING:
             break
     recorder.close("success")
