@@ -33,6 +33,7 @@ def run_context(setup: TreeSetup, record_images: bool = False) -> RunContext:
     """The context a run's nodes share, built from the setup message: the team's models and views, seed, priors."""
     return RunContext(
         seed=setup.seed,
+        tick_period=1.0 / setup.tick_hz,
         robots={name: RobotState(model) for name, (model, _) in setup.team.items()},
         views={name: VIEWS[view] for name, (_, view) in setup.team.items()},
         priors=dict(setup.priors),
@@ -108,7 +109,7 @@ class TreeHost:
 
     def _declared(self, tick: int) -> frozenset[tuple[str, str]]:
         """``(robot, sensor)`` pairs the nodes ticked in ``tick`` declare they read."""
-        return frozenset(pair for node in self.nodes if node.ticked == tick for pair in node.reads_sensors)
+        return frozenset(pair for node in self.nodes if node.ticked == tick for pair in node.wanted_sensors())
 
     def _output(self, sensors: frozenset[tuple[str, str]]) -> TickOutput:
         context = self.context

@@ -133,6 +133,8 @@ class RunContext:
     operator: OperatorLatch = field(default_factory=OperatorLatch)
     seed: int = 0
     now: float = 0.0
+    #: simulated time (s) between two ticks of the tree
+    tick_period: float = 0.1
     robots: dict[str, RobotState] = field(default_factory=dict)
     views: dict[str, type[RobotView]] = field(default_factory=dict)
     link: LinkState = field(default_factory=LinkState)
@@ -312,6 +314,15 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P, R]):
             if name not in (None, "None"):
                 pairs.append((str(name), item.format(**values)))
         return tuple(pairs)
+
+    def wanted_sensors(self) -> frozenset[tuple[str, str]]:
+        """The declared sensors to deliver with the next tick (default: all of them, every tick it is ticked).
+
+        A node that reads a sensor only now and then (a camera every half second) returns the pairs it will
+        read at the next tick (``self.now + self.context.tick_period``) and nothing between: a camera nobody
+        reads is not rendered.
+        """
+        return self.reads_sensors
 
     @classmethod
     def claimed(cls, params: P, robot: str | None) -> tuple[tuple[str, str], ...]:

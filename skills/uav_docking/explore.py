@@ -237,6 +237,11 @@ class Explore(Phased, Skill["Explore.Params"]):
         if not self.robot.motors_on and not self.robot.docked:
             self.robot.set_motors(True)
 
+    def wanted_sensors(self) -> frozenset[tuple[str, str]]:
+        """The front camera only for the tick of the next view (every ``view_period``): it is not rendered between."""
+        due = self.now + self.context.tick_period + 1e-9 >= self.next_view
+        return self.reads_sensors if due else frozenset()
+
     def step(self) -> Status:
         p = self.params
         if self.robot.docked:
