@@ -72,18 +72,6 @@ class CompiledTree:
         """Skill leaves, in tree order."""
         return [n for n in self.nodes if isinstance(n, Skill)]
 
-    def active_skills(self) -> dict[str, list[Skill[Any]]]:
-        """Running skills by robot name (``""`` for skills without a robot)."""
-        active: dict[str, list[Skill[Any]]] = {}
-        for skill in self.skills:
-            if skill.status == py_trees.common.Status.RUNNING:
-                active.setdefault(skill.robot_name or "", []).append(skill)
-        return active
-
-    def count(self) -> int:
-        """Number of py_trees behaviours in the tree."""
-        return sum(1 for _ in self.root.iterate())
-
 
 def robot_kind_matches(kind: str, accepted: tuple[type, ...] | None) -> bool:
     """Whether robots of ``kind`` have every capability in ``accepted`` (``None``: any robot)."""

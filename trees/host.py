@@ -106,7 +106,6 @@ class TreeHost:
             self.root.stop(Status.INVALID)
         return self._output(frozenset())
 
-
     def _declared(self, tick: int) -> frozenset[tuple[str, str]]:
         """``(robot, sensor)`` pairs the nodes ticked in ``tick`` declare they read."""
         return frozenset(pair for node in self.nodes if node.ticked == tick for pair in node.wanted_sensors())
@@ -133,11 +132,6 @@ class TreeHost:
             if isinstance(node, Skill) and node.status == Status.RUNNING:
                 active.setdefault(node.robot_name or "", []).append(node.name)
         return {robot: tuple(names) for robot, names in active.items()}
-
-    @property
-    def status(self) -> Status:
-        """The root's status."""
-        return self.root.status
 
 
 def view_name(view_class: type[RobotView]) -> str:
