@@ -143,10 +143,8 @@ async def visit(url: str, subprotocol: str) -> str:
         return f"refused: HTTP {refused.response.status_code}"
 
 
-async def visits_then_stay(url: str) -> tuple[list[str], list[dict], int | None]:
-    """Five visits, three legacy ones, then a client until the end: (visit results, its status messages, close code)."""
-    results = [await visit(url, SUBPROTOCOL) for _ in range(5)]
-    results += [await visit(url, "foxglove.websocket.v1") for _ in range(3)]
+async def stay(url: str) -> tuple[list[dict], int | None]:
+    """Connect and listen until the server closes; returns the status messages heard and the close code."""
     statuses = []
     async with websockets.connect(url, subprotocols=[SUBPROTOCOL], open_timeout=10) as ws:
         try:
@@ -156,14 +154,26 @@ async def visits_then_stay(url: str) -> tuple[list[str], list[dict], int | None]
                     statuses.append(json.loads(frame))
         except websockets.exceptions.ConnectionClosedOK:
             pass
-        return results, statuses, ws.close_code
+        return statuses, ws.close_code
+
+
+async def visits_while_one_stays(url: str) -> tuple[list[str], list[dict], int | None]:
+    """One client stays to the end while five visit and three legacy ones are refused: (visits, statuses, close code).
+
+    The staying client connects first, so a run that ends early on a fast machine cannot leave it unheard.
+    """
+    staying = asyncio.create_task(stay(url))
+    results = [await visit(url, SUBPROTOCOL) for _ in range(5)]
+    results += [await visit(url, "foxglove.websocket.v1") for _ in range(3)]
+    statuses, code = await staying
+    return results, statuses, code
 
 
 def test_clients_come_and_go_quietly_and_hear_how_the_run_ended(tmp_path):
     """Five clients connect and leave, a legacy client is refused thrice, one stays: the run prints one line for it."""
     process, url, _ = start_live(tmp_path, "demo_hover", "--speed", "2", "--no-log")
     try:
-        results, statuses, code = asyncio.run(visits_then_stay(url))
+        results, statuses, code = asyncio.run(visits_while_one_stays(url))
     finally:
         out, err = process.communicate(timeout=120)
     assert process.returncode == 0, err
