@@ -113,7 +113,36 @@ class SafeStop(Command):
 
 @dataclass(frozen=True)
 class LinkSend(Command):
-    """Broadcast ``payload`` on the team link as ``robot``, on ``topic``; it arrives late, or is lost."""
+    """Broadcast ``payload`` on the team link as ``robot``, on ``topic``; it arrives late, or is lost.
+
+    ``reliable``: the sender's radio retries a lost message until it is acknowledged (it arrives later instead of
+    never), and delivers the messages of its topic in the order sent.
+    """
 
     topic: str
     payload: Any
+    reliable: bool = False
+
+
+#: commands a remote pilot streams at its control rate: a lost one is superseded by the next, so none is retried
+PILOTING: tuple[type[Command], ...] = (FlyVelocity, Hover)
+
+
+def command_topics(robot: str) -> tuple[str, str]:
+    """The team-link topics on which ``robot``'s firmware takes commands from another member's computer.
+
+    ``"<robot>/pilot"`` for piloting commands (:data:`PILOTING`: unacknowledged, the newest wins) and
+    ``"<robot>/command"`` for one-shot commands (acknowledged and retried, applied in the order sent).
+    """
+    return f"{robot}/pilot", f"{robot}/command"
+
+
+def command_topic(command: Command) -> str:
+    """The team-link topic of :func:`command_topics` on which ``command`` travels."""
+    pilot, one_shot = command_topics(command.robot)
+    return pilot if isinstance(command, PILOTING) else one_shot
+
+
+def over_link(computer: str, command: Command) -> LinkSend:
+    """``command``, computed on team member ``computer``, as the radio message that carries it to its robot."""
+    return LinkSend(computer, command_topic(command), command, reliable=not isinstance(command, PILOTING))

@@ -90,8 +90,8 @@ class RecordingArbiter(Arbiter):
         super().__init__()
         self.sent: list[tuple[int, str, str, str, str]] = []
 
-    def command(self, resource, command, node_id, node_name, yielding=False):
-        kept = super().command(resource, command, node_id, node_name, yielding)
+    def command(self, resource, command, node_id, node_name, yielding=False, computer=None):
+        kept = super().command(resource, command, node_id, node_name, yielding, computer)
         if kept is None:
             self.sent.append((self.tick, node_name, command.robot, resource, type(command).__name__))
         return kept

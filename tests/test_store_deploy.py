@@ -148,5 +148,6 @@ def test_deploy_hands_over_the_heading_the_uav_was_locked_with():
         while getattr(deploy, "phase", None) is not Deploy.Phase.CLIMB and world.now < 10.0:  # up to the release
             assert harness.run(deploy, 0.1) == Status.RUNNING
         assert harness.blackboard("carrier/part_b_yaw") is None  # released: no UAV on Part A any more
+        assert harness.run(deploy, 0.3) == Status.RUNNING  # the hand-over crosses the team link (20 ms + jitter)
         error = math.remainder(uav.estimator.estimate().yaw - yaw_of(uav.pose()[1]), math.tau)
         assert abs(error) < 0.05

@@ -22,7 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from marsupial.api.commands import Command, LinkSend, SafeStop
+from marsupial.api.commands import Command, LinkSend, SafeStop, over_link
 
 if TYPE_CHECKING:
     from marsupial.api.views import RobotView
@@ -81,12 +81,14 @@ class Arbiter:
         return None
 
     def command(self, resource: str, command: Command, node_id: Any, node_name: str,
-                yielding: bool = False) -> Stamp | None:
+                yielding: bool = False, computer: str | None = None) -> Stamp | None:
         """Send ``command`` to its robot's ``resource`` on behalf of a node.
 
         ``yielding`` (a finishing node): the command is dropped when another
-        node commanded the resource in this tick. Returns the stamp that kept
-        the resource (``None`` when the command was sent).
+        node commanded the resource in this tick. ``computer``: the team member
+        whose computer runs the node; a command for another robot goes out as
+        its radio message (:func:`~marsupial.api.commands.over_link`). Returns
+        the stamp that kept the resource (``None`` when the command was sent).
         """
         robot = command.robot
         if yielding:
@@ -94,11 +96,13 @@ class Arbiter:
             if kept is not None:
                 return kept
         self._last[(robot, resource)] = Stamp(self.tick, node_id, node_name, type(command).__name__)
+        if computer is not None and computer != robot:
+            command = over_link(computer, command)
         self.outbox.append((node_name, command))
         return None
 
     def safe_stop(self, robot: RobotView | type[RobotView], name: str, node_id: Any, node_name: str,
-                  resources: Any = None) -> Stamp | None:
+                  resources: Any = None, computer: str | None = None) -> Stamp | None:
         """Leave ``resources`` of robot ``name`` (default: all its kind's) safe for a stopping node.
 
         Each resource is stopped unless another node took it over in this tick.
@@ -107,7 +111,7 @@ class Arbiter:
         """
         kept: Stamp | None = None
         for resource in sorted(robot.resources() if resources is None else resources):
-            holder = self.command(resource, SafeStop(name, resource), node_id, node_name, yielding=True)
+            holder = self.command(resource, SafeStop(name, resource), node_id, node_name, True, computer)
             kept = kept or holder
         return kept
 
@@ -118,7 +122,8 @@ class Claimant:
 
     ``claims`` holds ``(robot, resource)`` pairs (``resource`` may be
     :data:`ANY_RESOURCE`); ``kept`` is the first stamp that kept a resource
-    from one of its finishing commands.
+    from one of its finishing commands; ``computer`` is the team member whose
+    onboard computer runs the node (``None``: each command's own robot, no radio).
     """
 
     node_id: Any
@@ -126,6 +131,7 @@ class Claimant:
     claims: frozenset[tuple[str, str]]
     finishing: bool = False
     kept: Stamp | None = None
+    computer: str | None = None
 
     def may_command(self, robot: str, resource: str) -> bool:
         """Whether the node claims ``robot``'s ``resource``."""
@@ -169,7 +175,7 @@ class NodeSink:
                 f"does not claim; expected '{resource}' (its own robot) or '{{member}}/{resource}' in the node's "
                 "'claims'"
             )
-        kept = self._arbiter.command(resource, command, node.node_id, node.name, node.finishing)
+        kept = self._arbiter.command(resource, command, node.node_id, node.name, node.finishing, node.computer)
         node.kept = node.kept or kept
         return kept is None
 
@@ -178,7 +184,7 @@ class NodeSink:
         node = self._node
         resources = [r for r in sorted(robot.resources()) if node.may_command(robot.name, r)]
         stoppable = [r for r in resources if r in robot.safe_stops]
-        kept = self._arbiter.safe_stop(robot, robot.name, node.node_id, node.name, stoppable)
+        kept = self._arbiter.safe_stop(robot, robot.name, node.node_id, node.name, stoppable, node.computer)
         node.kept = node.kept or kept
 
     def broadcast(self, command: LinkSend) -> None:

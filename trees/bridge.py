@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import TYPE_CHECKING, Any
 
-from marsupial.api.commands import LinkSend
+from marsupial.api.commands import LinkSend, command_topics
 from marsupial.api.model import RobotModel
 from marsupial.api.priors import BuildingPlan
 from marsupial.api.ticks import OperatorCommand, TickInput, TickOutput, TreeSetup
@@ -64,6 +64,9 @@ class WorldBridge:
         #: log every exchanged message on ``/replay`` (``--record-inputs``)
         self.record_inputs = record_inputs and recorder is not None
         self.gateways = {name: RobotGateway(robot) for name, robot in world.robots.items()}
+        for name, gateway in self.gateways.items():  # each robot's firmware obeys what other members' computers send
+            for topic in command_topics(name):
+                world.team_link.listen(topic, gateway.apply)
         #: the last value of every metric of the run (nodes' and referee's)
         self.metrics: dict[str, float] = {}
         self.scores = ScoreBoard(world, recorder, self.metrics)
@@ -116,7 +119,7 @@ class WorldBridge:
         link = self.world.team_link
         for command in output.commands:
             if isinstance(command, LinkSend):
-                link.send(command.robot, command.topic, command.payload)
+                link.send(command.robot, command.topic, command.payload, command.reliable)
             else:
                 self.gateways[command.robot].apply(command)
         self._record(output)

@@ -99,6 +99,10 @@ def _route_sdk_logs() -> SdkLogLines:
     return _sdk_lines
 
 
+#: wall seconds the server stays up after the run-end status, so that clients receive it
+END_GRACE_S = 1.0
+
+
 class LiveSink(ServerListener):
     """A Foxglove WebSocket server on ``host:port`` (``port`` 0: any free port) as a recorder sink.
 
@@ -122,6 +126,7 @@ class LiveSink(ServerListener):
         self._resend: set[int] = set()  # latched channel ids a client subscribed to since their last message
         self._last_ns = -1
         self._stopped = False
+        self._told_end = False
         self.server = foxglove.start_server(
             name=name,
             host=host,
@@ -185,11 +190,18 @@ class LiveSink(ServerListener):
             level = StatusLevel.Info if outcome == "success" else StatusLevel.Warning
             self.server.publish_status(f"run ended: {outcome} at {at} s (simulated); the live view stops", level,
                                        id="run_end")
+            self._told_end = True
 
     def close(self) -> None:
-        """Stop the server (clients are disconnected); safe to call more than once."""
+        """Stop the server (clients are disconnected); safe to call more than once.
+
+        After the run-end status it waits :data:`END_GRACE_S` of wall time first: the server sends from its own
+        thread, and stopping at once can cut the status off before a client has it.
+        """
         if not self._stopped:
             self._stopped = True
+            if self._told_end:
+                threading.Event().wait(END_GRACE_S)
             self.server.stop()
 
     # ------------------------------------------------------------ ServerListener

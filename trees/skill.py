@@ -239,6 +239,9 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P, R]):
     #: resources it commands: ``"<resource>"`` of its robot or ``"{param}/<resource>"`` of a member (``None``: every
     #: resource of its robot)
     claims: ClassVar[tuple[str, ...] | None] = ()
+    #: the parameter naming the team member whose onboard computer runs the node (``None``: no radio between its
+    #: decisions and its robots); its commands to every other robot cross the team link (docs/sensing.md)
+    runs_on: ClassVar[str | None] = None
     #: whether the node acts on / observes one team robot
     uses_robot: ClassVar[bool] = True
     #: a condition's parameter set by the compact guard form (``Condition.primary``); ``None`` for skills
@@ -258,6 +261,8 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P, R]):
             cls.Params = argument
         if not (isinstance(cls.Params, type) and issubclass(cls.Params, NodeParams)):
             raise TypeError(f"{cls.__name__}: its parameter class must derive from NodeParams, not {cls.Params!r}")
+        if cls.runs_on is not None and cls.runs_on not in cls.Params.model_fields:
+            raise TypeError(f"{cls.__name__}: runs_on names '{cls.runs_on}', which is not one of its parameters")
         for kind in cls.robot_kinds or ():
             if not isinstance(kind, type):
                 raise TypeError(
@@ -272,7 +277,8 @@ class MissionNode(py_trees.behaviour.Behaviour, Generic[P, R]):
         self.robot_name = robot
         #: registry name of the node (``"goto"``, ``"battery_below"``); set by the compiler
         self.kind: str = type(self).__name__.lower()
-        self._claimant = Claimant(self.id, name, frozenset(self.claimed(self.params, robot)))
+        computer = getattr(self.params, self.runs_on) if self.runs_on is not None else None
+        self._claimant = Claimant(self.id, name, frozenset(self.claimed(self.params, robot)), computer=computer)
         #: the ``(robot, sensor)`` pairs it reads (delivered while it is ticked), and the last tick it was ticked in
         self.reads_sensors = frozenset(self.sensors_read(self.params, robot))
         self.ticked = 0

@@ -204,6 +204,7 @@ class Contact(Phased, Skill["Contact.Params"]):
     robot_kinds = (Rotorcraft,)
     sensors = ("sonar", "{carrier}/eye_in_hand")
     claims = ("{carrier}/docking",)  # the UAV and the arm are track's, which runs beside it
+    runs_on = "carrier"  # Narváez §V-B-2: computed on the carrier, sent to the UAV over Wi-Fi
     reads = (f"{{carrier}}/{TRACKING}",)
     writes = (f"{{carrier}}/{CONTACT_TARGET}", f"{{carrier}}/{DOCKING_FLAG}", f"{{carrier}}/{PART_B_YAW}")
     phase: Phase

@@ -239,6 +239,7 @@ class RelativeHold(Skill["RelativeHold.Params"]):
     robot_kinds = (Rotorcraft,)
     sensors = ("{carrier}/eye_in_hand",)
     claims = ("rotors",)
+    runs_on = "carrier"  # Narváez §V-B-2: computed on the carrier, sent to the UAV over Wi-Fi
     writes = ("{robot}/hold_error",)
 
     def start(self) -> None:

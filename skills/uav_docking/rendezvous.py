@@ -112,6 +112,7 @@ class Rendezvous(Phased, Skill["Rendezvous.Params"]):
     robot_kinds = (Rotorcraft,)
     sensors = ("{carrier}/eye_in_hand",)
     claims = ("rotors", "{carrier}/arm")
+    runs_on = "carrier"  # Narváez §V-B-2: computed on the carrier, sent to the UAV over Wi-Fi
     writes = (f"{{carrier}}/{DOCKING_FLAG}", f"{{carrier}}/{UAV_POSE}")
     phase: Phase
 

@@ -123,6 +123,7 @@ class Deploy(Phased, Skill["Deploy.Params"]):
     robot_kinds = (Rotorcraft,)
     sensors = ("{carrier}/eye_in_hand",)
     claims = ("rotors", "{carrier}/arm", "{carrier}/docking")
+    runs_on = "carrier"  # Narváez §V-B-2: computed on the carrier, sent to the UAV over Wi-Fi
     reads = (f"{{carrier}}/{PART_B_YAW}",)
     writes = (f"{{carrier}}/{DOCKING_FLAG}", f"{{carrier}}/{UAV_STORED}", f"{{carrier}}/{PART_B_YAW}")
     phase: Phase

@@ -232,6 +232,7 @@ class Track(Skill["Track.Params"]):
     robot_kinds = (Rotorcraft,)
     sensors = ("sonar", "{carrier}/eye_in_hand", "{carrier}/lidar")
     claims = ("rotors", "{carrier}/arm")
+    runs_on = "carrier"  # Narváez §V-B-2: computed on the carrier, sent to the UAV over Wi-Fi
     writes = (f"{{carrier}}/{TRACKING}", f"{{carrier}}/{DOCKING_FLAG}")
 
     @classmethod

@@ -35,6 +35,11 @@ class TeamLinkSpec(BaseModel):
     telemetry_hz: float = Field(
         20.0, gt=0, le=240, description="Rate at which every robot broadcasts its estimate (Hz)."
     )
+    retry_s: float = Field(
+        0.5, gt=0, le=10.0,
+        description="Acknowledgement timeout of a one-shot command before it is sent again (s).",
+    )
+    max_retries: int = Field(3, ge=0, le=100, description="Times a one-shot command is sent again before it is lost.")
 
 
 class SensingSpec(BaseModel):
