@@ -43,8 +43,8 @@ if not __package__:  # run as a file (python benchmarks/<name>.py): the benchmar
 
 from benchmarks.bench_common import best_seconds, machine_info, print_tables, write_report
 from marsupial.api.kinematics import ArmKinematics
+from marsupial.skills.common.ik_engine import IKEngine
 from marsupial.skills.uav_docking.engine import STAGES, MotionEngine
-from marsupial.skills.uav_docking.ik_engine import IKEngine
 from marsupial.world.robots.mobile_manipulator import ARM_POSES
 
 TARGET_P95_MS = 25.0

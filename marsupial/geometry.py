@@ -56,6 +56,11 @@ def yaw_of(quaternion: Vector) -> float:
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
+def yaw_of_rotation(R: np.ndarray) -> float:
+    """Heading (rad) of the rotation ``R``: the angle of its x axis about z."""
+    return math.atan2(R[1, 0], R[0, 0])
+
+
 def quaternion_from_yaw(yaw: float) -> np.ndarray:
     """``[x, y, z, w]`` quaternion of a turn of ``yaw`` rad about z."""
     return np.array([0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)])

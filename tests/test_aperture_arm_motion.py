@@ -9,7 +9,7 @@ import pytest
 from marsupial.api.assets import asset_path
 from marsupial.api.kinematics import ArmKinematics
 from marsupial.skills.aperture.arm_motion import ArmCollisionModel, ArmPlanParams, plan_arm_path
-from marsupial.skills.uav_docking.trajectory import TrajectoryParams, time_joint_path
+from marsupial.skills.common.trajectory import TrajectoryParams, time_joint_path
 
 URDF = asset_path("mms.urdf")
 ARM_LINKS = [f"arm_link_{i}" for i in range(1, 7)] + ["gripper_base", "finger_left", "finger_right"]

@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from marsupial.api.kinematics import ArmKinematics
+from marsupial.skills.common.ik_engine import IKEngine
 from marsupial.skills.uav_docking.cord import Cord, CordParams
 from marsupial.skills.uav_docking.graph import Graph, GraphParams, build_graph, rrt_star_tree, section_of
-from marsupial.skills.uav_docking.ik_engine import IKEngine
 from marsupial.skills.uav_docking.vicinity import build_vicinity
 from marsupial.skills.uav_docking.zones import ZoneMap, carrier_zones
 

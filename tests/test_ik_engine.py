@@ -11,8 +11,8 @@ import pytest
 
 from marsupial.api.errors import UnknownNameError
 from marsupial.api.kinematics import ArmKinematics
+from marsupial.skills.common.ik_engine import ArmGeometry, ClosedFormIK, DlsIK, IKEngine
 from marsupial.skills.uav_docking.cord import Cord, CordParams
-from marsupial.skills.uav_docking.ik_engine import ArmGeometry, ClosedFormIK, DlsIK, IKEngine
 from marsupial.skills.uav_docking.vicinity import build_vicinity
 
 Q_READY = np.array([0.0, -0.87, 1.98, 0.0, -1.11, 0.0])  # the carrier's "docking_ready" arm pose

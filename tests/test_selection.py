@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from marsupial.api.kinematics import ArmKinematics
+from marsupial.skills.common.ik_engine import IKEngine
 from marsupial.skills.uav_docking.graph import Graph
-from marsupial.skills.uav_docking.ik_engine import IKEngine
 from marsupial.skills.uav_docking.selection import (
     PbvsTarget,
     SelectionParams,

@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from marsupial.skills.uav_docking.trajectory import JointTrajectory, TrajectoryParams, plan_joint_trajectory
+from marsupial.skills.common.trajectory import JointTrajectory, TrajectoryParams, plan_joint_trajectory
 from marsupial.world.robots.arm import RPM
 from marsupial.world.robots.mobile_manipulator import JOINT_SPEED_LIMIT
 

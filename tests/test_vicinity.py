@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from marsupial.api.kinematics import ArmKinematics
+from marsupial.skills.common.ik_engine import IKEngine
 from marsupial.skills.uav_docking.cord import Cord, CordParams, build_cord
-from marsupial.skills.uav_docking.ik_engine import IKEngine
 from marsupial.skills.uav_docking.vicinity import (
     VicinityParams,
     build_vicinity,

@@ -15,7 +15,7 @@ holster and for Phase I of the launch:
   each state and each motion checked by the model (at ``resolution`` rad);
   seeded, and ended after a number of validity checks rather than a wall-clock
   budget, so a mission + seed plans the same path every run.
-- :func:`~..uav_docking.trajectory.time_joint_path` (toppra) times the path.
+- :func:`~..common.trajectory.time_joint_path` (toppra) times the path.
 
 Frames: the arm frame M (the kinematics' base link) for every pose; the
 map's voxels are brought into M by the arm base's estimated pose in the

@@ -56,8 +56,8 @@ from marsupial.geometry import rotation_matrix, transform
 from marsupial.trees.phases import Phased, Transition, go, phase_event
 from marsupial.trees.skill import NodeParams, Skill
 
-from ..uav_docking.ik_engine import ClosedFormIK
-from ..uav_docking.trajectory import TrajectoryParams
+from ..common.ik_engine import ClosedFormIK
+from ..common.trajectory import TrajectoryParams
 from .analyze import LAUNCH_PLANS
 from .arm_motion import ArmCollisionModel, ArmPlanParams, plan_arm_path
 from .insertion import (

@@ -51,11 +51,10 @@ import shapely
 from marsupial.api.assets import asset_path
 from marsupial.api.kinematics import ArmKinematics
 from marsupial.api.silhouette import MAV_IN_CRADLE
-from marsupial.geometry import transform
+from marsupial.geometry import transform, yaw_of_rotation
 
-from ..uav_docking.ik_engine import ClosedFormIK
-from ..uav_docking.relative_hold import CarrierFrame
-from ..uav_docking.selection import yaw_of_rotation
+from ..common.carrier_frame import CarrierFrame
+from ..common.ik_engine import ClosedFormIK
 from .arm_motion import ArmCollisionModel, urdf_shapes
 from .launch_pose import LaunchPlan
 

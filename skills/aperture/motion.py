@@ -1,7 +1,7 @@
 """Executing planned arm motions of the MMS: a toppra-timed joint path streamed to the joint controllers.
 
 A skill plans a joint path (:mod:`.insertion`, :func:`~.arm_motion.plan_arm_path`), times it with
-:func:`~..uav_docking.trajectory.time_joint_path` and hands it to an :class:`ArmMotion`, which on every tick
+:func:`~..common.trajectory.time_joint_path` and hands it to an :class:`ArmMotion`, which on every tick
 sets the joint targets to q(t) (simulated time since it began) and reports the motion done once the time is up
 and the encoders are within a tolerance of the goal. The joint PIDs in the physics do the tracking.
 
@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from ..uav_docking.trajectory import JointTrajectory, TrajectoryParams, time_joint_path
+from ..common.trajectory import JointTrajectory, TrajectoryParams, time_joint_path
 from .arm_motion import densify
 
 RESOLUTION = 0.05  # rad: joint-space spacing of the timed paths (the planner's collision-check resolution)

@@ -27,7 +27,7 @@ Here, with numpy and the arm's pinocchio model:
    the far arm of a 30 cm U cut by the image border (analysed again, it was
    not detected);
 4. the camera link's goal in each candidate's arm frame M, solved by the
-   closed-form IK of the spherical-wrist arm (:class:`~..uav_docking.ik_engine.ClosedFormIK`
+   closed-form IK of the spherical-wrist arm (:class:`~..common.ik_engine.ClosedFormIK`
    on the pinocchio model) within the joint limits, and checked by pinocchio
    forward kinematics: the solution must place the camera at the goal and
    project t_a inside its image, in front of the near clip.
@@ -59,8 +59,8 @@ from typing import Any
 
 import numpy as np
 
+from ..common.ik_engine import ClosedFormIK, DlsIK
 from ..navigation import Footprint
-from ..uav_docking.ik_engine import ClosedFormIK, DlsIK
 from .detection import CAMERA_LINK
 from .volumetric import FREE, OCCUPIED, UNKNOWN, VolumetricMap
 

@@ -77,6 +77,7 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.api.capabilities import Rotorcraft
+from marsupial.geometry import yaw_of_rotation
 from marsupial.trees.metrics import MetricSpec
 from marsupial.trees.milestones import milestone
 from marsupial.trees.phases import Phased, Transition, go, phase_event
@@ -85,7 +86,6 @@ from marsupial.trees.skill import Condition, NodeParams, Skill
 from .gust_guard import GuardLimits, GustGuard
 from .pose import invert
 from .relative_hold import PART_A_LINK, part_b_transform
-from .selection import yaw_of_rotation
 from .team import DOCKING_FLAG, PART_B_YAW, CarrierName, carrier_port
 from .track import CONTACT_TARGET, TRACKING, ContactTarget, TrackingState
 

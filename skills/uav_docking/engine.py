@@ -56,9 +56,10 @@ import numpy as np
 
 from marsupial.api.kinematics import ArmKinematics
 
+from ..common.ik_engine import ArmGeometry, IKEngine
+from ..common.trajectory import JointTrajectory, TrajectoryParams, plan_joint_trajectory
 from .cord import Cord, CordParams, CordPlanner
 from .graph import Graph, GraphParams, build_graph
-from .ik_engine import ArmGeometry, IKEngine
 from .selection import (
     PbvsTarget,
     Selection,
@@ -69,7 +70,6 @@ from .selection import (
     select,
     tracking_state,
 )
-from .trajectory import JointTrajectory, TrajectoryParams, plan_joint_trajectory
 from .vicinity import Vicinity, VicinityCheck, VicinityParams, build_vicinity, validate_vicinity
 from .zones import Repair, ZoneMap, carrier_zones, repair_cord, thickening
 

@@ -48,7 +48,7 @@ from ompl import base as ob
 from ompl import geometric as og
 from ompl import util as ou
 
-from .ik_engine import IKEngine
+from ..common.ik_engine import IKEngine
 from .vicinity import PointZones, Vicinity
 
 ou.setLogLevel(ou.LOG_WARN)  # RRT* informs about its set-up on every cycle otherwise

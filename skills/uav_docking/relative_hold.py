@@ -7,7 +7,7 @@ above Part A that the arm can reach, whatever the carrier does.
 
 Control law: the target point of M moves with the carrier as a rigid body,
 so its velocity ``v_target = v_base + ω × (p_target − p_base)`` (from the
-carrier's own estimate, :class:`CarrierFrame`) is fed forward, and the
+carrier's own estimate, :class:`~..common.carrier_frame.CarrierFrame`) is fed forward, and the
 position error measured in M is fed back::
 
     v = v_target + R_N_M · sat(k_p · (p_target_M − p_uav_M), v_max)
@@ -34,14 +34,13 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.api.capabilities import Rotorcraft
-from marsupial.api.readings import StateEstimate
-from marsupial.geometry import rot_z, rotation_matrix, transform
+from marsupial.geometry import rot_z, transform, yaw_of_rotation
 from marsupial.trees.metrics import MetricSpec
 from marsupial.trees.skill import NodeParams, Skill
 
+from ..common.carrier_frame import CarrierFrame
 from .observer import EyeInHandObserver
 from .relative_pose import RelativePose, RelativeState
-from .selection import yaw_of_rotation
 from .team import CarrierName, carrier_port
 
 PART_A_LINK = "part_a"
@@ -59,61 +58,6 @@ class HoldGains:
     kp: float = 1.5
     max_speed: float = 0.5
     k_yaw: float = 1.5
-
-
-@dataclass(frozen=True)
-class CarrierFrame:
-    """Frame M of the carrier now and how it moves, from the carrier's own estimate (its navigation frame N).
-
-    Attributes:
-        p_M_W: origin of M (m); R_W_M: rotation of M in N.
-        p_base_W, v_base_W, w_base_W: the carrier base's position (m), linear (m/s) and angular (rad/s) velocity in N.
-    """
-
-    p_M_W: np.ndarray
-    R_W_M: np.ndarray
-    p_base_W: np.ndarray
-    v_base_W: np.ndarray
-    w_base_W: np.ndarray
-
-    @classmethod
-    def from_estimate(cls, estimate: StateEstimate, mount: tuple[np.ndarray, np.ndarray]) -> CarrierFrame:
-        """Frame M from the carrier's estimate (of its ``base_footprint``) and M's ``mount`` in that frame.
-
-        The mount is a position (m) and a rotation, from the URDF.
-        """
-        R = rotation_matrix(estimate.orientation)
-        p_base = np.asarray(estimate.position, dtype=float)
-        p_M_base, R_base_M = mount
-        return cls(
-            p_base + R @ p_M_base,
-            R @ R_base_M,
-            p_base,
-            np.asarray(estimate.velocity),
-            R @ np.asarray(estimate.angular_velocity),
-        )
-
-    @classmethod
-    def of(cls, carrier: Any) -> CarrierFrame:
-        """Frame M of ``carrier`` (onboard interface or command port) from its onboard estimate."""
-        return cls.from_estimate(carrier.estimate(), carrier.arm_mount())
-
-    @property
-    def yaw(self) -> float:
-        """Heading of M about N's z (rad)."""
-        return math.atan2(self.R_W_M[1, 0], self.R_W_M[0, 0])
-
-    def to_world(self, p_M: np.ndarray) -> np.ndarray:
-        """A point of M in N (m)."""
-        return self.p_M_W + self.R_W_M @ p_M
-
-    def to_M(self, p_W: np.ndarray) -> np.ndarray:
-        """A point of N in frame M (m)."""
-        return self.R_W_M.T @ (np.asarray(p_W) - self.p_M_W)
-
-    def velocity_of(self, p_W: np.ndarray) -> np.ndarray:
-        """Velocity (m/s, N) of the point ``p_W`` carried rigidly by the carrier."""
-        return self.v_base_W + np.cross(self.w_base_W, np.asarray(p_W) - self.p_base_W)
 
 
 def hold_command(

@@ -58,10 +58,8 @@ from typing import Any
 import numpy as np
 
 from marsupial.api.readings import VisionFix, vision_fix_topic
-from marsupial.geometry import quaternion_from_matrix, rot_z, rotation_matrix, transform
+from marsupial.geometry import quaternion_from_matrix, rot_z, rotation_matrix, transform, yaw_of_rotation
 from marsupial.sensing import EstimateHistory
-
-from .selection import yaw_of_rotation
 
 ESTIMATE_WINDOW = 1.0  # s of estimates kept to propagate to a late frame's stamp
 MAX_FRAME_AGE_S = 0.5  # s: older frames are not fused (the estimates would be extrapolated to their stamp)

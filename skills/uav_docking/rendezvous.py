@@ -39,8 +39,9 @@ from marsupial.api.capabilities import Rotorcraft
 from marsupial.trees.phases import Phased, Transition, go, phase_event
 from marsupial.trees.skill import NodeParams, Skill
 
+from ..common.carrier_frame import CarrierFrame
 from .observer import EyeInHandObserver, position_spread
-from .relative_hold import CarrierFrame, HoldGains, command_hold, relative_pose_of, target_above_part_a
+from .relative_hold import HoldGains, command_hold, relative_pose_of, target_above_part_a
 from .relative_pose import RelativeState
 from .team import DOCKING_FLAG, UAV_POSE, CarrierName, carrier_port
 

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from marsupial.api.tags import load_tag_bundle
+from marsupial.geometry import yaw_of_rotation
 
 from .graph import Graph
 
@@ -61,11 +62,6 @@ class PbvsTarget:
             raise ValueError(f"PbvsTarget needs standoff >= 0 m, got {self.standoff}")
         if len(self.aim_Q) != 3:
             raise ValueError(f"PbvsTarget.aim_Q must be a point [x, y, z] in the UAV frame, got {self.aim_Q}")
-
-
-def yaw_of_rotation(R: np.ndarray) -> float:
-    """Heading (rad) of the rotation ``R``: the angle of its x axis about z."""
-    return math.atan2(R[1, 0], R[0, 0])
 
 
 def rot_z(yaw: float) -> np.ndarray:

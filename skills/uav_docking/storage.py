@@ -34,14 +34,16 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.api.capabilities import Carrier, Rotorcraft
+from marsupial.geometry import yaw_of_rotation
 from marsupial.trees.milestones import milestone
 from marsupial.trees.phases import Phased, Transition, go, phase_event
 from marsupial.trees.skill import NodeParams, Skill, TeamMember
 
+from ..common.carrier_frame import CarrierFrame
 from .pose import invert
-from .relative_hold import PART_A_LINK, CarrierFrame, HoldGains, command_hold, part_b_transform, relative_pose_of
+from .relative_hold import PART_A_LINK, HoldGains, command_hold, part_b_transform, relative_pose_of
 from .relative_pose import RelativePose, RelativeState
-from .selection import rot_z, yaw_of_rotation
+from .selection import rot_z
 from .team import DOCKING_FLAG, PART_B_YAW, UAV_STORED, CarrierName, carrier_port
 
 ARM_TOLERANCE = 0.02  # rad: every joint this close to its target counts as arrived

@@ -62,15 +62,17 @@ from py_trees.common import Status
 from pydantic import Field
 
 from marsupial.api.capabilities import Rotorcraft
+from marsupial.geometry import yaw_of_rotation
 from marsupial.trees.metrics import MetricSpec
 from marsupial.trees.phases import phase_event
 from marsupial.trees.skill import NodeParams, Skill
 
+from ..common.carrier_frame import CarrierFrame
 from .engine import MotionEngine, MotionEngineParams
 from .pose import invert
-from .relative_hold import PART_A_LINK, CarrierFrame, HoldGains, command_hold, part_b_offset, relative_pose_of
+from .relative_hold import PART_A_LINK, HoldGains, command_hold, part_b_offset, relative_pose_of
 from .relative_pose import RelativeState
-from .selection import PbvsTarget, SelectionParams, rot_z, yaw_of_rotation
+from .selection import PbvsTarget, SelectionParams, rot_z
 from .team import DOCKING_FLAG, CarrierName, carrier_port
 from .vicinity import VicinityParams
 from .zones import ZoneMap, carrier_zones

@@ -135,7 +135,7 @@ class PointZones(Protocol):
 
 
 class PoseSolver(Protocol):
-    """What the validation needs of an IK engine (:class:`~.ik_engine.IKEngine`)."""
+    """What the validation needs of an IK engine (:class:`~..common.ik_engine.IKEngine`)."""
 
     def solve(self, positions: np.ndarray, rotations: np.ndarray, q_ref: np.ndarray | None = None) -> Any: ...
 

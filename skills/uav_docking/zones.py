@@ -36,8 +36,8 @@ import pinocchio as pin
 from marsupial.api.assets import asset_path
 from marsupial.api.kinematics import ArmKinematics
 
+from ..common.ik_engine import ArmGeometry
 from .cord import Cord
-from .ik_engine import ArmGeometry
 from .vicinity import Vicinity
 
 
