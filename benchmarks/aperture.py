@@ -68,6 +68,7 @@ from benchmarks.aperture_mission import verdict as mission_verdict
 from benchmarks.bench_common import (
     campaign,
     campaign_arguments,
+    command_line,
     conclude,
     machine_info,
     print_tables,
@@ -641,7 +642,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         runs = args.runs or Path(scratch)
         runs.mkdir(parents=True, exist_ok=True)
         results: dict[str, Any] = {
-            "command": " ".join(["python benchmarks/aperture.py", *(sys.argv[1:] if argv is None else argv)]),
+            "command": command_line("aperture.py", argv),
             "quick": args.quick, "date": time.strftime("%Y-%m-%d"), "machine": machine_info(workers=args.workers),
         }
         if args.only is not None:

@@ -12,6 +12,7 @@ import json
 import math
 import os
 import platform
+import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
@@ -34,6 +35,25 @@ def best_seconds(fn: Callable[[], Any], repeats: int) -> float:
         fn()
         best = min(best, time.perf_counter() - start)
     return best
+
+
+def command_line(script: str, argv: Sequence[str] | None) -> str:
+    """The command that ran ``script`` (``argv``: its arguments, default ``sys.argv[1:]``), as a results page quotes it.
+
+    A folder of this machine (an absolute path, or the value of ``--runs``) is written as the option's name in
+    capitals (``--runs RUNS``): a page names no folder of the machine it was made on.
+    """
+    args = list(sys.argv[1:] if argv is None else argv)
+    shown: list[str] = []
+    for i, arg in enumerate(args):
+        option = args[i - 1] if i > 0 and args[i - 1].startswith("--") else None
+        if option is not None and (option == "--runs" or os.path.isabs(arg)):
+            arg = option.lstrip("-").replace("-", "_").upper()
+        elif arg.startswith("--") and "=" in arg and os.path.isabs(arg.split("=", 1)[1]):
+            name = arg.split("=", 1)[0]
+            arg = f"{name}={name.lstrip('-').replace('-', '_').upper()}"
+        shown.append(arg)
+    return " ".join([f"python benchmarks/{script}", *shown])
 
 
 def campaign_arguments(description: str, quick_help: str, out: Path, report: Path) -> argparse.ArgumentParser:

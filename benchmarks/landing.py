@@ -78,6 +78,7 @@ from benchmarks.bench_common import (
     campaign_arguments,
     campaign_spec,
     campaigns,
+    command_line,
     conclude,
     machine_info,
     targets_lines,
@@ -822,7 +823,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         runs.mkdir(parents=True, exist_ok=True)
         started = time.perf_counter()
         results: dict[str, Any] = {
-            "command": " ".join(["python benchmarks/landing.py", *(sys.argv[1:] if argv is None else argv)]),
+            "command": command_line("landing.py", argv),
             "quick": args.quick,
             "trials_421": trials,
             "cycles": cycles,

@@ -71,6 +71,7 @@ from benchmarks.bench_common import (
     campaign_arguments,
     campaign_spec,
     campaigns,
+    command_line,
     machine_info,
     print_tables,
     write_report,
@@ -888,7 +889,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         runs = args.runs or Path(scratch)
         runs.mkdir(parents=True, exist_ok=True)
         results: dict[str, Any] = {
-            "command": " ".join(["python benchmarks/uav_docking.py", *(sys.argv[1:] if argv is None else argv)]),
+            "command": command_line("uav_docking.py", argv),
             "quick": args.quick,
             "machine": machine_info(workers=args.workers, date=time.strftime("%Y-%m-%d")),
             "paper": PAPER,

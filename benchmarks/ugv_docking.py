@@ -70,6 +70,7 @@ from benchmarks.bench_common import (
     campaign_arguments,
     campaign_spec,
     campaigns,
+    command_line,
     conclude,
     machine_info,
     targets_lines,
@@ -763,7 +764,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         runs.mkdir(parents=True, exist_ok=True)
         started = time.perf_counter()
         results: dict[str, Any] = {
-            "command": " ".join(["python benchmarks/ugv_docking.py", *(sys.argv[1:] if argv is None else argv)]),
+            "command": command_line("ugv_docking.py", argv),
             "quick": args.quick,
             "date": time.strftime("%Y-%m-%d"),
             "machine": machine_info(workers=args.workers),

@@ -85,3 +85,11 @@ def test_the_profile_breakdown_accounts_for_the_engine_and_the_modules():
         profiled["profiled_s"], rel=0.02)
     sections = profile_breakdown.breakdown_sections(report)
     assert [len(rows) for _, _, rows in sections] == [7, len(rows)]
+
+
+def test_a_results_page_quotes_its_command_without_the_folders_of_the_machine():
+    from benchmarks.bench_common import command_line
+
+    shown = command_line("landing.py", ["--runs", "runs/landing", "--workers", "2", "--out", "/tmp/x.json",
+                                        "--report=/home/me/page.md", "--sweep"])
+    assert shown == "python benchmarks/landing.py --runs RUNS --workers 2 --out OUT --report=REPORT --sweep"
