@@ -650,16 +650,19 @@ SEES = [
     "boundary, [docs/sensing.md](../sensing.md); figures and sources in [docs/world.md](../world.md) §5), at the "
     "defaults (`world.sensing.noise_scale` 1) unless a row says otherwise:",
     "",
-    "- **The carrier** (`rendezvous`, `track` and its Motion Engine, `contact`, `store`): the eye-in-hand camera "
-    "(320×240 at 10 Hz in these missions; pixel noise σ 2, 1 % lost frames, **50 ms latency**) measuring the tag "
-    "bundle (P_Q^{C_A} by solvePnP, P_Q^M by eq. (1) with F(q) from the 12-bit joint encoders read at the frame's "
-    "stamp); its own base estimate (wheel odometry in the encounters: encoder scale error 3 %, gyro drift; the "
-    "AMCL-like map localisation, 0.05 m / 1°, in `usar_docking`); the UAV's onboard estimate received over the "
+    "- **The carrier's computer** (`rendezvous`, `relative_hold`, `track` and its Motion Engine, `contact`, "
+    "`store`, `deploy`; Narváez §V-B-2: the computation is centralised on the mobile manipulator): the eye-in-hand "
+    "camera (320×240 at 10 Hz in these missions; pixel noise σ 2, 1 % lost frames, **50 ms latency**) measuring the "
+    "tag bundle (P_Q^{C_A} by solvePnP, P_Q^M by eq. (1) with F(q) from the 12-bit joint encoders read at the "
+    "frame's stamp); its own base estimate (wheel odometry in the encounters: encoder scale error 3 %, gyro drift; "
+    "the AMCL-like map localisation, 0.05 m / 1°, in `usar_docking`); the UAV's onboard estimate received over the "
     "team link (20 Hz telemetry, 20 ± 10 ms latency, 2 % loss); the LiDAR (12 mm noise, lost echoes) for the "
     "local map; the docking device's own states (magnet coil, contact switch, lever end switch).",
-    "- **The UAV** (`relative_hold`, the hold in M during `rendezvous`, `track` and `contact`): its onboard estimate "
-    "(IMU with bias, optical flow with noise, 3 % scale error and a slow bias, sonar, barometer; the position is "
-    "integrated and drifts) and the carrier's P_Q^M estimate and base estimate over the team link.",
+    "- **The UAV** flies the commands the carrier's computer sends it over the team link (velocity and hover "
+    "commands unacknowledged, lost with the link's 2 %; motor and estimate commands acknowledged and retried after "
+    "0.5 s, up to 3 times: Parrot ARSDK's Bebop figures) on its onboard estimate (IMU with bias, optical flow with "
+    "noise, 3 % scale error and a slow bias, sonar, barometer; the position is integrated and drifts), which fuses "
+    "the carrier's vision fixes, also received over the link.",
     "- **Between camera frames and where the bundle is hidden**, P_Q^M is propagated with the two robots' own "
     "estimates (`skills/uav_docking/relative_pose.py`); each accepted frame re-anchors it (gain 0.8, outlier gate "
     "3 cm). No skill reads a true pose, velocity, gap or contact: `tests/test_sensing_boundary.py` enforces it.",
