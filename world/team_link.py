@@ -10,8 +10,8 @@ sent it (:meth:`TeamLink.latest_on`: what a robot's firmware listening on a
 topic hears, e.g. the vision fixes of a UAV). A robot's firmware may also
 act on a topic as its messages arrive (:meth:`TeamLink.listen`: the commands
 another member's computer sends it). A reliable message (acknowledged and
-retried) is never lost: each loss delays it by a retry timeout, and its
-topic's messages arrive in the order sent. Simulated time throughout.
+retried) is lost only after ``max_retries`` retries: each loss delays it by
+a retry timeout, and its topic's messages arrive in the order sent. Simulated time throughout.
 
 Default figures (scaled by ``world.sensing.noise_scale``): 802.11 telemetry
 between robots a few metres apart, 20 ms one-way latency with 10 ms jitter
